@@ -1,0 +1,244 @@
+//! Streaming audio decoding (WAV, FLAC, OGG/Vorbis, MP3, AIFF, MP4/AAC) to a mono float32 stream.
+//!
+//! librosa loads through libsndfile and averages the channels in float32; we do the same per
+//! frame, so a decoded block can be handed straight to the resampler and the full multi-channel
+//! file is never held in memory (a one-hour stereo song would otherwise need ~1.3 GB).
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+use symphonia::core::codecs::audio::{AudioDecoder, AudioDecoderOptions};
+use symphonia::core::errors::Error as SymError;
+use symphonia::core::formats::probe::Hint;
+use symphonia::core::formats::{FormatOptions, FormatReader, TrackType};
+use symphonia::core::io::MediaSourceStream;
+use symphonia::core::meta::MetadataOptions;
+
+use crate::error::{MusicError, Result};
+
+/// An opened audio file that yields mono float32 blocks at its native sample rate.
+pub struct MonoDecoder {
+    path: PathBuf,
+    format: Box<dyn FormatReader>,
+    decoder: Box<dyn AudioDecoder>,
+    track_id: u32,
+    sample_rate: u32,
+    channels: usize,
+    interleaved: Vec<f32>,
+    /// Number of packets that failed to decode and were skipped (as libsndfile/ffmpeg do).
+    skipped_packets: usize,
+    decoded_any: bool,
+    total_frames: Option<u64>,
+    decoded_frames: u64,
+}
+
+impl MonoDecoder {
+    /// Opens `path` and prepares its default audio track for decoding.
+    pub fn open(path: &Path) -> Result<Self> {
+        let file = File::open(path).map_err(|source| MusicError::Open {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+        if len == 0 {
+            return Err(MusicError::EmptyFile {
+                path: path.to_path_buf(),
+            });
+        }
+        let mss = MediaSourceStream::new(Box::new(file), Default::default());
+        let mut hint = Hint::new();
+        if let Some(ext) = path.extension().and_then(|e| e.to_str()) {
+            hint.with_extension(ext);
+        }
+        let format = symphonia::default::get_probe()
+            .probe(
+                &hint,
+                mss,
+                FormatOptions::default(),
+                MetadataOptions::default(),
+            )
+            .map_err(|e| MusicError::UnknownFormat {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+        let track =
+            format
+                .default_track(TrackType::Audio)
+                .ok_or_else(|| MusicError::NoAudioTrack {
+                    path: path.to_path_buf(),
+                })?;
+        let track_id = track.id;
+        let total_frames = track.num_frames;
+        let params = track
+            .codec_params
+            .as_ref()
+            .and_then(|p| p.audio())
+            .ok_or_else(|| MusicError::NoAudioTrack {
+                path: path.to_path_buf(),
+            })?
+            .clone();
+        let decoder = symphonia::default::get_codecs()
+            .make_audio_decoder(&params, &AudioDecoderOptions::default())
+            .map_err(|e| MusicError::UnsupportedCodec {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+        let sample_rate = params.sample_rate.unwrap_or(0);
+        let channels = params.channels.as_ref().map(|c| c.count()).unwrap_or(0);
+        Ok(Self {
+            path: path.to_path_buf(),
+            format,
+            decoder,
+            track_id,
+            sample_rate,
+            channels,
+            interleaved: Vec::new(),
+            skipped_packets: 0,
+            decoded_any: false,
+            total_frames,
+            decoded_frames: 0,
+        })
+    }
+
+    /// Native sample rate as declared by the container (0 if unknown until the first block).
+    pub fn sample_rate(&self) -> u32 {
+        self.sample_rate
+    }
+
+    /// Path this decoder reads, for error messages.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Fraction of the declared length decoded so far (0 when the container does not say).
+    pub fn progress(&self) -> f64 {
+        match self.total_frames {
+            Some(n) if n > 0 => (self.decoded_frames as f64 / n as f64).min(1.0),
+            _ => 0.0,
+        }
+    }
+
+    /// Packets that failed to decode and were skipped.
+    pub fn skipped_packets(&self) -> usize {
+        self.skipped_packets
+    }
+
+    /// Appends the next decoded block, averaged to mono, to `out`.
+    ///
+    /// Returns `Ok(false)` at the end of the stream.
+    pub fn next_block(&mut self, out: &mut Vec<f32>) -> Result<bool> {
+        loop {
+            let packet = match self.format.next_packet() {
+                Ok(Some(p)) => p,
+                Ok(None) => return Ok(false),
+                Err(SymError::IoError(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                    // A truncated file: keep what was decoded, as libsndfile does, but a file
+                    // that ends before any audio is an error.
+                    if self.decoded_any {
+                        tracing::warn!(
+                            "{}: stream ends early (truncated file)",
+                            self.path.display()
+                        );
+                        return Ok(false);
+                    }
+                    return Err(self.corrupt(e.to_string()));
+                }
+                Err(SymError::ResetRequired) => {
+                    return Err(self.corrupt("stream changes its format mid-file".into()));
+                }
+                Err(e) => {
+                    if self.decoded_any {
+                        tracing::warn!("{}: stops decoding early: {e}", self.path.display());
+                        return Ok(false);
+                    }
+                    return Err(self.corrupt(e.to_string()));
+                }
+            };
+            if packet.track_id != self.track_id {
+                continue;
+            }
+            let buf = match self.decoder.decode(&packet) {
+                Ok(buf) => buf,
+                Err(SymError::DecodeError(e)) => {
+                    self.skipped_packets += 1;
+                    tracing::debug!("{}: skipping undecodable packet: {e}", self.path.display());
+                    if self.skipped_packets > 64 && !self.decoded_any {
+                        return Err(self.corrupt(format!("no packet decodes ({e})")));
+                    }
+                    continue;
+                }
+                Err(SymError::IoError(e)) => {
+                    self.skipped_packets += 1;
+                    tracing::debug!("{}: skipping packet: {e}", self.path.display());
+                    continue;
+                }
+                Err(e) => return Err(self.corrupt(e.to_string())),
+            };
+            let spec = buf.spec();
+            let channels = spec.channels().count().max(1);
+            let rate = spec.rate();
+            if self.sample_rate == 0 {
+                self.sample_rate = rate;
+            } else if rate != self.sample_rate {
+                return Err(self.corrupt(format!(
+                    "sample rate changes mid-stream ({} -> {rate} Hz)",
+                    self.sample_rate
+                )));
+            }
+            self.channels = channels;
+            let frames = buf.frames();
+            if frames == 0 {
+                continue;
+            }
+            self.interleaved.clear();
+            buf.copy_to_vec_interleaved(&mut self.interleaved);
+            self.decoded_any = true;
+            self.decoded_frames += frames as u64;
+            mix_to_mono(&self.interleaved, channels, out);
+            return Ok(true);
+        }
+    }
+
+    fn corrupt(&self, reason: String) -> MusicError {
+        MusicError::Corrupt {
+            path: self.path.clone(),
+            reason,
+        }
+    }
+}
+
+/// Averages interleaved channels in float32, the way `numpy.mean(y, axis=0)` does for few channels.
+fn mix_to_mono(interleaved: &[f32], channels: usize, out: &mut Vec<f32>) {
+    if channels == 1 {
+        out.extend_from_slice(interleaved);
+        return;
+    }
+    let inv = channels as f32;
+    out.extend(interleaved.chunks_exact(channels).map(|frame| {
+        let s: f32 = frame.iter().sum();
+        s / inv
+    }));
+}
+
+/// Decodes a whole file to mono float32 at its native rate. Returns (samples, sample_rate).
+pub fn decode_mono(path: &Path) -> Result<(Vec<f32>, u32)> {
+    let mut dec = MonoDecoder::open(path)?;
+    let mut out = Vec::new();
+    while dec.next_block(&mut out)? {}
+    finish(&dec, out)
+}
+
+fn finish(dec: &MonoDecoder, out: Vec<f32>) -> Result<(Vec<f32>, u32)> {
+    if out.is_empty() {
+        return Err(MusicError::NoSamples {
+            path: dec.path.clone(),
+        });
+    }
+    if dec.sample_rate == 0 {
+        return Err(MusicError::BadSampleRate {
+            path: dec.path.clone(),
+            rate: 0,
+        });
+    }
+    Ok((out, dec.sample_rate))
+}

@@ -1,0 +1,195 @@
+//! Short-time Fourier transform with librosa's framing: `center=True`, zero (`constant`)
+//! padding of `n_fft/2` on both sides, periodic window, `1 + len/hop` frames.
+//!
+//! Spectrograms are stored frame-major (`[frame][bin]`), the order they are produced in, so
+//! per-frame consumers (mel, CQT, chroma) read contiguous memory.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use realfft::num_complex::Complex32;
+use realfft::{RealFftPlanner, RealToComplex};
+
+/// A dense frame-major matrix: `rows` frames of `cols` values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameMatrix {
+    pub rows: usize,
+    pub cols: usize,
+    pub data: Vec<f32>,
+}
+
+impl FrameMatrix {
+    pub fn zeros(rows: usize, cols: usize) -> Self {
+        Self {
+            rows,
+            cols,
+            data: vec![0.0; rows * cols],
+        }
+    }
+    pub fn row(&self, r: usize) -> &[f32] {
+        &self.data[r * self.cols..(r + 1) * self.cols]
+    }
+    pub fn row_mut(&mut self, r: usize) -> &mut [f32] {
+        &mut self.data[r * self.cols..(r + 1) * self.cols]
+    }
+    pub fn get(&self, r: usize, c: usize) -> f32 {
+        self.data[r * self.cols + c]
+    }
+    /// The transpose, as a `(cols, rows)` row-major buffer (librosa's `(features, frames)` layout).
+    pub fn transposed(&self) -> Vec<f32> {
+        let mut out = vec![0.0; self.data.len()];
+        for r in 0..self.rows {
+            for c in 0..self.cols {
+                out[c * self.rows + r] = self.data[r * self.cols + c];
+            }
+        }
+        out
+    }
+}
+
+/// Number of frames librosa's centred STFT produces for `len` samples.
+pub fn n_frames(len: usize, hop: usize) -> usize {
+    1 + len / hop
+}
+
+/// Periodic Hann window of length `n` (`scipy.signal.get_window('hann', n, fftbins=True)`).
+pub fn hann_periodic(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())
+        .collect()
+}
+
+/// A planned STFT: window, FFT size and hop.
+#[derive(Clone)]
+pub struct Stft {
+    n_fft: usize,
+    hop: usize,
+    window: Vec<f32>,
+    fft: Arc<dyn RealToComplex<f32>>,
+}
+
+impl Stft {
+    /// Hann-windowed STFT (librosa's default window).
+    pub fn hann(n_fft: usize, hop: usize) -> Self {
+        let w = hann_periodic(n_fft).into_iter().map(|v| v as f32).collect();
+        Self::with_window(n_fft, hop, w)
+    }
+
+    /// Rectangular window (`window='ones'`), as the CQT's filter-bank transform uses.
+    pub fn rectangular(n_fft: usize, hop: usize) -> Self {
+        Self::with_window(n_fft, hop, vec![1.0; n_fft])
+    }
+
+    pub fn with_window(n_fft: usize, hop: usize, window: Vec<f32>) -> Self {
+        assert_eq!(window.len(), n_fft, "window length must equal n_fft");
+        assert!(hop > 0 && n_fft > 0);
+        let fft = RealFftPlanner::<f32>::new().plan_fft_forward(n_fft);
+        Self {
+            n_fft,
+            hop,
+            window,
+            fft,
+        }
+    }
+
+    pub fn n_fft(&self) -> usize {
+        self.n_fft
+    }
+    pub fn hop(&self) -> usize {
+        self.hop
+    }
+    pub fn n_bins(&self) -> usize {
+        self.n_fft / 2 + 1
+    }
+
+    /// Copies centred, zero-padded, windowed frame `t` of `y` into `buf` (length `n_fft`).
+    fn fill_frame(&self, y: &[f32], t: usize, buf: &mut [f32]) {
+        let half = (self.n_fft / 2) as isize;
+        let start = (t * self.hop) as isize - half;
+        for (i, (b, w)) in buf.iter_mut().zip(&self.window).enumerate() {
+            let idx = start + i as isize;
+            *b = if idx >= 0 && (idx as usize) < y.len() {
+                y[idx as usize] * w
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// Calls `f(t, spectrum)` for frames `range` of `y`, in order, reusing buffers.
+    pub fn for_each_frame(
+        &self,
+        y: &[f32],
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &[Complex32]),
+    ) {
+        let mut input = self.fft.make_input_vec();
+        let mut output = self.fft.make_output_vec();
+        let mut scratch = self.fft.make_scratch_vec();
+        for t in range {
+            self.fill_frame(y, t, &mut input);
+            self.fft
+                .process_with_scratch(&mut input, &mut output, &mut scratch)
+                .expect("buffer sizes come from the plan");
+            f(t, &output);
+        }
+    }
+
+    /// Computes one output row per frame in parallel: `f(spectrum, row, scratch)` fills a row of
+    /// `cols`; `scratch` is a buffer reused across the frames of one worker.
+    ///
+    /// This is how every spectral feature is built without keeping the complex STFT around.
+    pub fn map_frames(
+        &self,
+        y: &[f32],
+        cols: usize,
+        f: impl Fn(&[Complex32], &mut [f32], &mut Vec<f32>) + Sync,
+    ) -> FrameMatrix {
+        let t = n_frames(y.len(), self.hop);
+        let mut out = FrameMatrix::zeros(t, cols);
+        if cols == 0 {
+            return out;
+        }
+        const CHUNK: usize = 256;
+        out.data
+            .par_chunks_mut(CHUNK * cols)
+            .enumerate()
+            .for_each(|(ci, rows)| {
+                let start = ci * CHUNK;
+                let end = (start + CHUNK).min(t);
+                let mut scratch = Vec::new();
+                self.for_each_frame(y, start..end, |ti, spec| {
+                    let r = ti - start;
+                    f(spec, &mut rows[r * cols..(r + 1) * cols], &mut scratch);
+                });
+            });
+        out
+    }
+
+    /// Magnitude spectrogram `|X|` (frames × bins).
+    pub fn magnitude(&self, y: &[f32]) -> FrameMatrix {
+        self.map_frames(y, self.n_bins(), |spec, row, _| {
+            for (o, c) in row.iter_mut().zip(spec) {
+                *o = c.norm();
+            }
+        })
+    }
+
+    /// Power spectrogram `|X|^2` (frames × bins).
+    pub fn power(&self, y: &[f32]) -> FrameMatrix {
+        self.map_frames(y, self.n_bins(), |spec, row, _| {
+            for (o, c) in row.iter_mut().zip(spec) {
+                let m = c.norm();
+                *o = m * m;
+            }
+        })
+    }
+
+    /// Complex spectrogram, frames × bins.
+    pub fn complex(&self, y: &[f32]) -> Vec<Vec<Complex32>> {
+        let t = n_frames(y.len(), self.hop);
+        let mut out = Vec::with_capacity(t);
+        self.for_each_frame(y, 0..t, |_, s| out.push(s.to_vec()));
+        out
+    }
+}
