@@ -5,16 +5,44 @@
 //! file is never held in memory (a one-hour stereo song would otherwise need ~1.3 GB).
 
 use std::fs::File;
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use symphonia::core::codecs::audio::{AudioDecoder, AudioDecoderOptions};
 use symphonia::core::errors::Error as SymError;
 use symphonia::core::formats::probe::Hint;
 use symphonia::core::formats::{FormatOptions, FormatReader, TrackType};
-use symphonia::core::io::MediaSourceStream;
+use symphonia::core::io::{MediaSource, MediaSourceStream};
 use symphonia::core::meta::MetadataOptions;
 
 use crate::error::{MusicError, Result};
+
+/// Where a song comes from: a file, or bytes compiled into a program (the bundled demo song).
+#[derive(Clone, Debug)]
+pub enum AudioSource {
+    File(PathBuf),
+    /// `name` is used for messages and as the format hint (its extension).
+    Bytes {
+        name: PathBuf,
+        bytes: &'static [u8],
+    },
+}
+
+impl AudioSource {
+    /// The path or name shown in messages.
+    pub fn label(&self) -> &Path {
+        match self {
+            AudioSource::File(p) => p,
+            AudioSource::Bytes { name, .. } => name,
+        }
+    }
+}
+
+impl From<&Path> for AudioSource {
+    fn from(p: &Path) -> Self {
+        AudioSource::File(p.to_path_buf())
+    }
+}
 
 /// An opened audio file that yields mono float32 blocks at its native sample rate.
 pub struct MonoDecoder {
@@ -35,17 +63,29 @@ pub struct MonoDecoder {
 impl MonoDecoder {
     /// Opens `path` and prepares its default audio track for decoding.
     pub fn open(path: &Path) -> Result<Self> {
-        let file = File::open(path).map_err(|source| MusicError::Open {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+        Self::open_source(&AudioSource::File(path.to_path_buf()))
+    }
+
+    /// Opens a file or an in-memory song.
+    pub fn open_source(source: &AudioSource) -> Result<Self> {
+        let path = source.label();
+        let (media, len): (Box<dyn MediaSource>, u64) = match source {
+            AudioSource::File(p) => {
+                let file = File::open(p).map_err(|source| MusicError::Open {
+                    path: p.clone(),
+                    source,
+                })?;
+                let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+                (Box::new(file), len)
+            }
+            AudioSource::Bytes { bytes, .. } => (Box::new(Cursor::new(*bytes)), bytes.len() as u64),
+        };
         if len == 0 {
             return Err(MusicError::EmptyFile {
                 path: path.to_path_buf(),
             });
         }
-        let mss = MediaSourceStream::new(Box::new(file), Default::default());
+        let mss = MediaSourceStream::new(media, Default::default());
         let mut hint = Hint::new();
         if let Some(ext) = path.extension().and_then(|e| e.to_str()) {
             hint.with_extension(ext);
@@ -57,9 +97,18 @@ impl MonoDecoder {
                 FormatOptions::default(),
                 MetadataOptions::default(),
             )
-            .map_err(|e| MusicError::UnknownFormat {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
+            .map_err(|e| match e {
+                // The container was recognised but holds an encoding we have no decoder for.
+                SymError::Unsupported(what) if !what.contains("format reader") => {
+                    MusicError::UnsupportedCodec {
+                        path: path.to_path_buf(),
+                        reason: what.to_string(),
+                    }
+                }
+                e => MusicError::UnknownFormat {
+                    path: path.to_path_buf(),
+                    reason: e.to_string(),
+                },
             })?;
         let track =
             format
@@ -118,6 +167,11 @@ impl MonoDecoder {
         }
     }
 
+    /// Frames (samples per channel) the container declares, if it does.
+    pub fn total_frames(&self) -> Option<u64> {
+        self.total_frames
+    }
+
     /// Packets that failed to decode and were skipped.
     pub fn skipped_packets(&self) -> usize {
         self.skipped_packets
@@ -130,29 +184,25 @@ impl MonoDecoder {
         loop {
             let packet = match self.format.next_packet() {
                 Ok(Some(p)) => p,
-                Ok(None) => return Ok(false),
+                Ok(None) => {
+                    self.check_complete()?;
+                    return Ok(false);
+                }
                 Err(SymError::IoError(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                    // A truncated file: keep what was decoded, as libsndfile does, but a file
-                    // that ends before any audio is an error.
+                    // The container promised more bytes than the file has. A missing tail is
+                    // lost music: say so rather than silently analysing part of the song.
                     if self.decoded_any {
-                        tracing::warn!(
-                            "{}: stream ends early (truncated file)",
-                            self.path.display()
-                        );
-                        return Ok(false);
+                        return Err(self.truncated(format!(
+                            "stream ends inside a packet after {:.2} s of audio",
+                            self.decoded_seconds()
+                        )));
                     }
                     return Err(self.corrupt(e.to_string()));
                 }
                 Err(SymError::ResetRequired) => {
                     return Err(self.corrupt("stream changes its format mid-file".into()));
                 }
-                Err(e) => {
-                    if self.decoded_any {
-                        tracing::warn!("{}: stops decoding early: {e}", self.path.display());
-                        return Ok(false);
-                    }
-                    return Err(self.corrupt(e.to_string()));
-                }
+                Err(e) => return Err(self.corrupt(e.to_string())),
             };
             if packet.track_id != self.track_id {
                 continue;
@@ -196,6 +246,34 @@ impl MonoDecoder {
             self.decoded_frames += frames as u64;
             mix_to_mono(&self.interleaved, channels, out);
             return Ok(true);
+        }
+    }
+
+    fn decoded_seconds(&self) -> f64 {
+        self.decoded_frames as f64 / self.sample_rate.max(1) as f64
+    }
+
+    /// At the end of the stream: did we get as many frames as the container declares?
+    fn check_complete(&self) -> Result<()> {
+        // One codec packet of slack: containers may count encoder padding differently.
+        const SLACK_FRAMES: u64 = 8192;
+        if let Some(total) = self.total_frames {
+            if self.decoded_frames + SLACK_FRAMES < total {
+                let sr = self.sample_rate.max(1) as f64;
+                return Err(self.truncated(format!(
+                    "decoded {:.2} s of the {:.2} s its header declares",
+                    self.decoded_frames as f64 / sr,
+                    total as f64 / sr
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn truncated(&self, reason: String) -> MusicError {
+        MusicError::Truncated {
+            path: self.path.clone(),
+            reason,
         }
     }
 

@@ -22,6 +22,8 @@ pub enum MusicError {
     UnsupportedCodec { path: PathBuf, reason: String },
     #[error("{path}: audio stream is corrupt or truncated: {reason}")]
     Corrupt { path: PathBuf, reason: String },
+    #[error("{path}: file is truncated: {reason}")]
+    Truncated { path: PathBuf, reason: String },
     #[error("{path}: contains no audio samples")]
     NoSamples { path: PathBuf },
     #[error("{path}: invalid sample rate {rate} Hz")]

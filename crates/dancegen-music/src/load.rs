@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::decode::MonoDecoder;
+use crate::decode::{AudioSource, MonoDecoder};
 use crate::error::{MusicError, Result};
 use crate::resample::{Resampler, resampled_len};
 
@@ -27,23 +27,24 @@ impl Audio {
 /// a few decoder blocks, whatever the length and channel count of the file. A file already at
 /// `target_sr` is returned untouched, as librosa does.
 pub fn load(path: &Path, target_sr: u32) -> Result<Audio> {
-    load_with_progress(path, target_sr, |_| {})
+    let mut v = load_many(&AudioSource::from(path), &[target_sr], |_| {})?;
+    Ok(v.pop().expect("one output per requested rate"))
 }
 
-/// [`load`], calling `progress(fraction)` now and then (for a progress bar on long files).
-pub fn load_with_progress(
-    path: &Path,
-    target_sr: u32,
+/// Loads `path` at several sample rates in one decoding pass (e.g. the feature rate and the
+/// 22050 Hz rate of EDGE's tempo prior). `progress(fraction)` is called now and then.
+/// `target_sr = 0` keeps the native rate (`librosa.load(sr=None)`).
+pub fn load_many(
+    source: &AudioSource,
+    target_srs: &[u32],
     mut progress: impl FnMut(f64),
-) -> Result<Audio> {
-    if target_sr == 0 {
-        return Err(MusicError::InvalidParameter("target sample rate 0".into()));
-    }
-    let mut dec = MonoDecoder::open(path)?;
+) -> Result<Vec<Audio>> {
+    let path = source.label();
+    let mut dec = MonoDecoder::open_source(source)?;
     let mut block = Vec::with_capacity(1 << 16);
-    let mut out = Vec::new();
+    let mut outs: Vec<Vec<f32>> = vec![Vec::new(); target_srs.len()];
+    let mut resamplers: Vec<Option<Resampler>> = Vec::new();
     let mut n_in = 0usize;
-    let mut resampler: Option<Resampler> = None;
     let mut native = 0u32;
     let mut blocks = 0usize;
     loop {
@@ -59,14 +60,30 @@ pub fn load_with_progress(
                     rate: 0,
                 });
             }
-            if native != target_sr {
-                resampler = Some(Resampler::new_hq(native as f64, target_sr as f64)?);
+            // Reserve the final size up front when the container declares its length, so a
+            // long song never pays for a doubling reallocation (2x peak memory).
+            if let Some(total) = dec.total_frames() {
+                for (out, &sr) in outs.iter_mut().zip(target_srs) {
+                    let rate = if sr == 0 { native } else { sr };
+                    out.reserve_exact(
+                        resampled_len(total as usize, native as f64, rate as f64) + 4096,
+                    );
+                }
+            }
+            for &sr in target_srs {
+                resamplers.push(if sr != 0 && sr != native {
+                    Some(Resampler::new_hq(native as f64, sr as f64)?)
+                } else {
+                    None
+                });
             }
         }
         n_in += block.len();
-        match resampler.as_mut() {
-            Some(r) => r.process(&block, &mut out)?,
-            None => out.extend_from_slice(&block),
+        for (r, out) in resamplers.iter_mut().zip(outs.iter_mut()) {
+            match r {
+                Some(r) => r.process(&block, out)?,
+                None => out.extend_from_slice(&block),
+            }
         }
         blocks += 1;
         if blocks % 256 == 0 {
@@ -78,15 +95,23 @@ pub fn load_with_progress(
             path: path.to_path_buf(),
         });
     }
-    if let Some(r) = resampler.as_mut() {
-        r.finish(&mut out)?;
-        out.resize(resampled_len(n_in, native as f64, target_sr as f64), 0.0);
+    let mut result = Vec::with_capacity(target_srs.len());
+    for ((r, mut out), &sr) in resamplers.into_iter().zip(outs).zip(target_srs) {
+        let sample_rate = if sr == 0 { native } else { sr };
+        if let Some(mut r) = r {
+            r.finish(&mut out)?;
+            out.resize(resampled_len(n_in, native as f64, sr as f64), 0.0);
+        }
+        // Give back a large over-reservation only (a shrink copies the buffer).
+        if out.capacity() > out.len() + out.len() / 4 + 65536 {
+            out.shrink_to_fit();
+        }
+        result.push(Audio {
+            samples: out,
+            sample_rate,
+            native_rate: native,
+        });
     }
-    out.shrink_to_fit();
     progress(1.0);
-    Ok(Audio {
-        samples: out,
-        sample_rate: target_sr,
-        native_rate: native,
-    })
+    Ok(result)
 }

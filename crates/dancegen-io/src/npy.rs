@@ -1,0 +1,133 @@
+//! numpy `.npy` arrays: little-endian, C order, as `numpy.load` expects.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::atomic::{WriteError, write_atomic};
+
+/// Writes a float32 array of `shape` (C order) to `path` atomically.
+pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<(), WriteError> {
+    let n: usize = shape.iter().product();
+    if n != data.len() {
+        return Err(WriteError {
+            path: path.to_path_buf(),
+            reason: format!(
+                "shape {shape:?} holds {n} values but {} were given",
+                data.len()
+            ),
+        });
+    }
+    write_atomic(path, |w| write_npy_f32_to(w, shape, data))
+}
+
+/// Writes an `.npy` float32 stream to any writer.
+pub fn write_npy_f32_to(w: &mut dyn Write, shape: &[usize], data: &[f32]) -> std::io::Result<()> {
+    let shape_u64: Vec<u64> = shape.iter().map(|&s| s as u64).collect();
+    use npyz::WriterBuilder;
+    let mut npy = npyz::WriteOptions::<f32>::new()
+        .default_dtype()
+        .shape(&shape_u64)
+        .writer(w)
+        .begin_nd()?;
+    npy.extend(data.iter().copied())?;
+    npy.finish()
+}
+
+/// A numpy array read as f64 values, whatever its numeric dtype.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NpyArray {
+    pub shape: Vec<usize>,
+    pub data: Vec<f64>,
+    /// numpy dtype string, e.g. `<f4`.
+    pub dtype: String,
+}
+
+/// A `.npy` file that could not be read.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {reason}")]
+pub struct ReadError {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+/// Reads a numeric `.npy` file (float32/64, int8-64, uint8-64, bool) into f64.
+pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
+    let err = |reason: String| ReadError {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let bytes = std::fs::read(path).map_err(|e| err(e.to_string()))?;
+    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| err(format!("not a .npy file: {e}")))?;
+    if npy.order() == npyz::Order::Fortran {
+        return Err(err("Fortran-order arrays are not supported".into()));
+    }
+    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let dtype = match npy.dtype() {
+        npyz::DType::Plain(t) => t.to_string(),
+        other => return Err(err(format!("unsupported dtype {other:?}"))),
+    };
+    macro_rules! conv {
+        ($t:ty) => {
+            npy.into_vec::<$t>()
+                .map_err(|e| err(e.to_string()))?
+                .into_iter()
+                .map(|v| v as f64)
+                .collect()
+        };
+    }
+    let data: Vec<f64> = match dtype.as_str() {
+        "<f4" => conv!(f32),
+        "<f8" => conv!(f64),
+        "<i8" => conv!(i64),
+        "<i4" => conv!(i32),
+        "<i2" => conv!(i16),
+        "|i1" => conv!(i8),
+        "<u8" => conv!(u64),
+        "<u4" => conv!(u32),
+        "<u2" => conv!(u16),
+        "|u1" => conv!(u8),
+        "|b1" => npy
+            .into_vec::<bool>()
+            .map_err(|e| err(e.to_string()))?
+            .into_iter()
+            .map(|v| v as u8 as f64)
+            .collect(),
+        d => return Err(err(format!("unsupported dtype {d}"))),
+    };
+    Ok(NpyArray { shape, data, dtype })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_f32() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.npy");
+        let data: Vec<f32> = (0..6).map(|i| i as f32 * 0.5).collect();
+        write_npy_f32(&p, &[2, 3], &data).unwrap();
+        let a = read_npy(&p).unwrap();
+        assert_eq!(a.shape, vec![2, 3]);
+        assert_eq!(a.dtype, "<f4");
+        assert_eq!(a.data, data.iter().map(|&v| v as f64).collect::<Vec<_>>());
+        let raw = std::fs::read(&p).unwrap();
+        assert_eq!(&raw[..6], b"\x93NUMPY");
+        // numpy aligns the data start to 64 bytes; 6 float32 follow the header.
+        assert_eq!((raw.len() - 24) % 64, 0);
+    }
+
+    #[test]
+    fn shape_mismatch_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(write_npy_f32(&dir.path().join("a.npy"), &[2, 2], &[1.0]).is_err());
+    }
+
+    #[test]
+    fn garbage_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g.npy");
+        std::fs::write(&p, b"not numpy").unwrap();
+        assert!(read_npy(&p).unwrap_err().to_string().contains("not a .npy"));
+    }
+}
