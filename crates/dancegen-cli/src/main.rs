@@ -1,1 +1,57 @@
-fn main() {}
+//! `dancegen`: music to 3D dance, from the command line.
+
+mod cli;
+mod cmd_beats;
+mod cmd_features;
+mod demo;
+mod plot;
+mod progress;
+
+use clap::Parser;
+
+fn main() -> std::process::ExitCode {
+    let cli = cli::Cli::parse();
+    init_logging(cli.verbose, cli.quiet);
+    let result = match &cli.command {
+        cli::Command::Features(args) => cmd_features::run(args, cli.quiet),
+        cli::Command::Beats(args) => cmd_beats::run(args, cli.quiet),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        // `dancegen beats | head`: the reader went away, which is not our failure.
+        Err(e) if is_broken_pipe(&e) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+fn init_logging(verbose: u8, quiet: bool) {
+    // -v levels apply to dancegen's own crates; libraries (decoders) stay at warn unless
+    // DANCEGEN_LOG says otherwise.
+    let ours = match (quiet, verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, 2) => "debug",
+        _ => "trace",
+    };
+    let others = if quiet { "error" } else { "warn" };
+    let directives = format!("{others},dancegen={ours},dancegen_music={ours},dancegen_io={ours}");
+    let filter = tracing_subscriber::EnvFilter::try_from_env("DANCEGEN_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(directives));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .without_time()
+        .init();
+}

@@ -58,9 +58,7 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
     };
     let bytes = std::fs::read(path).map_err(|e| err(e.to_string()))?;
     let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| err(format!("not a .npy file: {e}")))?;
-    if npy.order() == npyz::Order::Fortran {
-        return Err(err("Fortran-order arrays are not supported".into()));
-    }
+    let fortran = npy.order() == npyz::Order::Fortran;
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
     let dtype = match npy.dtype() {
         npyz::DType::Plain(t) => t.to_string(),
@@ -94,7 +92,34 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
             .collect(),
         d => return Err(err(format!("unsupported dtype {d}"))),
     };
+    // np.save keeps Fortran order for F-contiguous arrays (e.g. a concatenation of
+    // transposes); we always hand out C order.
+    let data = if fortran {
+        fortran_to_c(&data, &shape)
+    } else {
+        data
+    };
     Ok(NpyArray { shape, data, dtype })
+}
+
+/// Reorders a Fortran-order (column-major) buffer of `shape` to C order.
+pub fn fortran_to_c(data: &[f64], shape: &[usize]) -> Vec<f64> {
+    let nd = shape.len();
+    let mut idx = vec![0usize; nd];
+    let mut out = vec![0.0; data.len()];
+    for (ci, o) in out.iter_mut().enumerate() {
+        let mut rem = ci;
+        for d in (0..nd).rev() {
+            idx[d] = rem % shape[d];
+            rem /= shape[d];
+        }
+        let mut fi = 0;
+        for d in (0..nd).rev() {
+            fi = fi * shape[d] + idx[d];
+        }
+        *o = data[fi];
+    }
+    out
 }
 
 #[cfg(test)]
@@ -115,6 +140,16 @@ mod tests {
         assert_eq!(&raw[..6], b"\x93NUMPY");
         // numpy aligns the data start to 64 bytes; 6 float32 follow the header.
         assert_eq!((raw.len() - 24) % 64, 0);
+    }
+
+    #[test]
+    fn fortran_order_is_reordered() {
+        // 2x3 matrix [[0,1,2],[3,4,5]] stored column-major: 0,3,1,4,2,5.
+        let f = [0.0, 3.0, 1.0, 4.0, 2.0, 5.0];
+        assert_eq!(
+            fortran_to_c(&f, &[2, 3]),
+            vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
+        );
     }
 
     #[test]

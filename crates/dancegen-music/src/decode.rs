@@ -71,9 +71,9 @@ impl MonoDecoder {
         let path = source.label();
         let (media, len): (Box<dyn MediaSource>, u64) = match source {
             AudioSource::File(p) => {
-                let file = File::open(p).map_err(|source| MusicError::Open {
+                let file = File::open(p).map_err(|err| MusicError::Open {
                     path: p.clone(),
-                    source,
+                    err,
                 })?;
                 let len = file.metadata().map(|m| m.len()).unwrap_or(0);
                 (Box::new(file), len)

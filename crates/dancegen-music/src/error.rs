@@ -6,12 +6,8 @@ use std::path::PathBuf;
 /// which one to fix.
 #[derive(Debug, thiserror::Error)]
 pub enum MusicError {
-    #[error("{path}: cannot open: {source}")]
-    Open {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{path}: cannot open: {err}")]
+    Open { path: PathBuf, err: std::io::Error },
     #[error("{path}: file is empty (0 bytes)")]
     EmptyFile { path: PathBuf },
     #[error("{path}: not a recognised audio file (unknown or corrupt container header): {reason}")]

@@ -13,14 +13,24 @@
 //!
 //! This crate has no deep-learning dependencies.
 
+pub mod beat;
+pub mod chroma;
+pub mod cqt;
 pub mod decode;
+pub mod delta;
+pub mod edge_slices;
 pub mod error;
+pub mod features;
+pub mod hpss;
 pub mod load;
 pub mod mel;
 pub mod mfcc;
 pub mod onset;
 pub mod resample;
 pub mod stft;
+pub mod tcdiff;
+pub mod tempo;
+pub mod tuning;
 
 pub use error::{MusicError, Result};
 pub use load::{Audio, load};

@@ -78,20 +78,18 @@ pub fn peak_pick(x: &[f32], p: &PeakPick) -> Vec<usize> {
         peaks.push(0);
         last_peak = Some(0);
     }
-    for i in 1..n {
-        if let Some(lp) = last_peak {
-            if i <= lp + p.wait {
-                continue;
-            }
+    for (i, &xi) in x.iter().enumerate().skip(1) {
+        if last_peak.is_some_and(|lp| i <= lp + p.wait) {
+            continue;
         }
         let lo_m = i.saturating_sub(p.pre_max);
         let hi_m = (i + p.post_max).min(n);
-        if x[i] != window_max(lo_m, hi_m) {
+        if xi != window_max(lo_m, hi_m) {
             continue;
         }
         let lo_a = i.saturating_sub(p.pre_avg);
         let hi_a = (i + p.post_avg).min(n);
-        if x[i] >= window_mean(lo_a, hi_a) + p.delta {
+        if xi >= window_mean(lo_a, hi_a) + p.delta {
             peaks.push(i);
             last_peak = Some(i);
         }

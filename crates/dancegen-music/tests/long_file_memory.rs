@@ -45,9 +45,7 @@ fn one_hour_stereo_file_streams_under_300_mb() {
         w.write_all(b"RIFF").unwrap();
         w.write_all(&(36 + data_len).to_le_bytes()).unwrap();
         w.write_all(b"WAVEfmt ").unwrap();
-        for v in [16u32] {
-            w.write_all(&v.to_le_bytes()).unwrap();
-        }
+        w.write_all(&16u32.to_le_bytes()).unwrap();
         for v in [1u16, 2] {
             w.write_all(&v.to_le_bytes()).unwrap();
         }
@@ -64,9 +62,9 @@ fn one_hour_stereo_file_streams_under_300_mb() {
             for i in start..(start + 4096).min(frames) {
                 // A 220 Hz tone with a slow tremolo: cheap, never silent.
                 let t = i as f32 / rate as f32;
-                let v = (0.3
+                let v = 0.3
                     * (2.0 * std::f32::consts::PI * 220.0 * t).sin()
-                    * (1.0 + 0.5 * (0.5 * t).sin())) as f32;
+                    * (1.0 + 0.5 * (0.5 * t).sin());
                 let s = (v * 32767.0) as i16;
                 buf.extend_from_slice(&s.to_le_bytes());
                 buf.extend_from_slice(&(-s).to_le_bytes());

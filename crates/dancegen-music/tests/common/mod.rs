@@ -25,6 +25,7 @@ pub fn read_npy(path: &Path) -> (Vec<f64>, Vec<usize>) {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
+    let fortran = npy.order() == npyz::Order::Fortran;
     let dtype = npy.dtype();
     let descr = match &dtype {
         npyz::DType::Plain(t) => t.to_string(),
@@ -52,7 +53,35 @@ pub fn read_npy(path: &Path) -> (Vec<f64>, Vec<usize>) {
             .collect(),
         d => panic!("{}: unsupported dtype {d}", path.display()),
     };
+    // np.save keeps Fortran order for F-contiguous arrays (e.g. concatenated transposes).
+    let data = if fortran {
+        fortran_to_c(&data, &shape)
+    } else {
+        data
+    };
     (data, shape)
+}
+
+fn fortran_to_c(data: &[f64], shape: &[usize]) -> Vec<f64> {
+    let n = data.len();
+    let mut out = vec![0.0; n];
+    let nd = shape.len();
+    let mut idx = vec![0usize; nd];
+    for (ci, o) in out.iter_mut().enumerate() {
+        // C-order multi-index of ci.
+        let mut rem = ci;
+        for d in (0..nd).rev() {
+            idx[d] = rem % shape[d];
+            rem /= shape[d];
+        }
+        // Fortran-order linear index.
+        let mut fi = 0;
+        for d in (0..nd).rev() {
+            fi = fi * shape[d] + idx[d];
+        }
+        *o = data[fi];
+    }
+    out
 }
 
 pub fn read_npy_f32(path: &Path) -> Vec<f32> {
