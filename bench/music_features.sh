@@ -12,7 +12,7 @@ shift || true
 venv="$here/.venv"
 if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import librosa, soundfile" 2>/dev/null; then
   python3 -m venv "$venv"
-  "$venv/bin/pip" install -q "librosa==0.11.0" soundfile
+  "$venv/bin/pip" install -q "librosa==0.11.0" soundfile threadpoolctl
 fi
 cargo build --release -q -p dancegen-cli --manifest-path "$root/Cargo.toml"
 target="${CARGO_TARGET_DIR:-$root/target}"

@@ -192,6 +192,25 @@ pub fn chroma_cqt_with(
     hop: usize,
     params: &ChromaCqtParams,
 ) -> Result<FrameMatrix> {
+    let bpo = params.bins_per_octave;
+    match params.tuning {
+        Some(t) => chroma_cqt_inner(y, sr, hop, params, || t),
+        None => chroma_cqt_inner(y, sr, hop, params, || estimate_tuning(y, sr, bpo)),
+    }
+}
+
+/// The CQT chroma with the tuning supplied by `estimate` (ignoring `params.tuning`).
+///
+/// The octave-halving cascade does not depend on the tuning (only the filters do), so the
+/// signal is resampled while `estimate` runs and the tuned filters are built; it is redone only
+/// if the tuned layout differs (a cutoff right at a power-of-two boundary).
+fn chroma_cqt_inner(
+    y: &[f32],
+    sr: f64,
+    hop: usize,
+    params: &ChromaCqtParams,
+    estimate: impl FnOnce() -> f64 + Send,
+) -> Result<FrameMatrix> {
     let fmin = params.fmin.unwrap_or_else(c1_hz);
     let bpo = params.bins_per_octave;
     let fold = CqToChroma::new(params.n_octaves * bpo, bpo, params.n_chroma, fmin)?;
@@ -202,25 +221,17 @@ pub fn chroma_cqt_with(
         tuning,
         ..CqtParams::default()
     };
-    let c = match params.tuning {
-        Some(t) => CqtPlan::cached(sr, hop, &cqt_params(t))?.magnitude(y)?,
-        None => {
-            // The octave-halving cascade does not depend on the tuning (only the filters do):
-            // resample while the tuning is estimated and the tuned filters are built; redo it
-            // only if the tuned layout differs (a cutoff right at a power-of-two boundary).
-            let untuned = MultirateLayout::new(sr, hop, &cqt_params(0.0))?;
-            let (signals, plan) = rayon::join(
-                || untuned.prepare(y),
-                || CqtPlan::cached(sr, hop, &cqt_params(estimate_tuning(y, sr, bpo))),
-            );
-            let plan = plan?;
-            let signals = match signals {
-                Ok(s) if plan.accepts(&s) => s,
-                _ => plan.prepare(y)?,
-            };
-            plan.magnitude_prepared(&signals)
-        }
+    let untuned = MultirateLayout::new(sr, hop, &cqt_params(0.0))?;
+    let (signals, plan) = rayon::join(
+        || untuned.prepare(y),
+        || CqtPlan::cached(sr, hop, &cqt_params(estimate())),
+    );
+    let plan = plan?;
+    let signals = match signals {
+        Ok(s) if plan.accepts(&s) => s,
+        _ => plan.prepare(y)?,
     };
+    let c = plan.magnitude_prepared(&signals);
     let mut chroma = fold.fold(&c);
     if let Some(norm) = params.norm {
         normalize_frames(&mut chroma, norm);
@@ -335,6 +346,25 @@ pub fn chroma_cens_with_tuning(
             ..ChromaCqtParams::default()
         },
     )?;
+    Ok(cens_from_chroma(&raw, Some(CENS_WIN_LEN_SMOOTH)))
+}
+
+/// [`chroma_cens`] whose tuning comes from `estimate`, run while the CQT's octave cascade is
+/// resampled. The 35-dim pipeline uses this to take the tuning from the STFT it computes for
+/// the mel spectrogram anyway (`estimate_tuning` runs the very same 2048/512 Hann STFT).
+pub fn chroma_cens_with_estimator(
+    y: &[f32],
+    sr: f64,
+    hop: usize,
+    n_chroma: usize,
+    estimate: impl FnOnce() -> f64 + Send,
+) -> Result<FrameMatrix> {
+    let params = ChromaCqtParams {
+        n_chroma,
+        norm: None,
+        ..ChromaCqtParams::default()
+    };
+    let raw = chroma_cqt_inner(y, sr, hop, &params, estimate)?;
     Ok(cens_from_chroma(&raw, Some(CENS_WIN_LEN_SMOOTH)))
 }
 

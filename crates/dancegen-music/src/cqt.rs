@@ -37,12 +37,11 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use rayon::prelude::*;
 use realfft::num_complex::{Complex, Complex32};
-use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::FftPlanner;
 
 use crate::error::{MusicError, Result};
 use crate::resample::resample_hq;
-use crate::stft::{FrameMatrix, n_frames};
+use crate::stft::{FrameMatrix, Stft, n_frames};
 
 /// Equivalent noise bandwidth of the Hann window (librosa's `WINDOW_BANDWIDTHS['hann']`).
 const HANN_BANDWIDTH: f64 = 1.50018310546875;
@@ -194,7 +193,7 @@ fn pairwise_sum_f32(a: &[f32]) -> f32 {
 
 /// `util.sparsify_rows(row, quantile)` on one float32 complex row: the kept `(bin, value)`.
 fn sparsify_row(row: &[Complex32], quantile: f64) -> Vec<(u32, Complex32)> {
-    let mags: Vec<f32> = row.iter().map(|c| c.norm()).collect();
+    let mags: Vec<f32> = row.iter().map(|&c| crate::stft::magnitude_of(c)).collect();
     let norm = pairwise_sum_f32(&mags);
     let mut sorted = mags.clone();
     sorted.sort_by(f32::total_cmp);
@@ -217,82 +216,6 @@ fn sparsify_row(row: &[Complex32], quantile: f64) -> Vec<(u32, Complex32)> {
         .collect()
 }
 
-/// Centred, zero-padded framing (librosa `center=True`, `pad_mode='constant'`) and a float32 real
-/// FFT per frame: the same frames as [`crate::stft::Stft`], but interior frames are one slice
-/// copy (and one vectorised window multiply) instead of a per-sample bounds check. The CQT runs
-/// seven of these per output frame, so the framing matters.
-pub(crate) struct FrameFft {
-    pub(crate) n_fft: usize,
-    pub(crate) hop: usize,
-    window: Option<Vec<f32>>,
-    fft: Arc<dyn RealToComplex<f32>>,
-}
-
-impl FrameFft {
-    /// `window = None` is the rectangular window (`window='ones'`).
-    pub(crate) fn new(n_fft: usize, hop: usize, window: Option<Vec<f32>>) -> Self {
-        assert!(n_fft > 0 && hop > 0);
-        if let Some(w) = &window {
-            assert_eq!(w.len(), n_fft, "window length must equal n_fft");
-        }
-        let fft = RealFftPlanner::<f32>::new().plan_fft_forward(n_fft);
-        Self {
-            n_fft,
-            hop,
-            window,
-            fft,
-        }
-    }
-
-    pub(crate) fn n_bins(&self) -> usize {
-        self.n_fft / 2 + 1
-    }
-
-    /// Calls `f(t, spectrum)` for the frames `range` of `y`, in order.
-    pub(crate) fn for_each_frame(
-        &self,
-        y: &[f32],
-        range: std::ops::Range<usize>,
-        mut f: impl FnMut(usize, &[Complex32]),
-    ) {
-        let mut input = self.fft.make_input_vec();
-        let mut output = self.fft.make_output_vec();
-        let mut scratch = self.fft.make_scratch_vec();
-        let half = (self.n_fft / 2) as isize;
-        for t in range {
-            let start = (t * self.hop) as isize - half;
-            if start >= 0 && start as usize + self.n_fft <= y.len() {
-                let src = &y[start as usize..start as usize + self.n_fft];
-                match &self.window {
-                    Some(w) => {
-                        for ((b, &v), &wv) in input.iter_mut().zip(src).zip(w) {
-                            *b = v * wv;
-                        }
-                    }
-                    None => input.copy_from_slice(src),
-                }
-            } else {
-                for (i, b) in input.iter_mut().enumerate() {
-                    let idx = start + i as isize;
-                    let v = if idx >= 0 && (idx as usize) < y.len() {
-                        y[idx as usize]
-                    } else {
-                        0.0
-                    };
-                    *b = match &self.window {
-                        Some(w) => v * w[i],
-                        None => v,
-                    };
-                }
-            }
-            self.fft
-                .process_with_scratch(&mut input, &mut output, &mut scratch)
-                .expect("buffer sizes come from the plan");
-            f(t, &output);
-        }
-    }
-}
-
 /// `Σ coefs[j] · spec[bins[j]]` in float32 with four independent accumulators (a ~13-term
 /// dot product per filter is otherwise bound by the floating-point add latency).
 #[inline]
@@ -313,7 +236,7 @@ fn sparse_dot(bins: &[u32], coefs: &[Complex32], spec: &[Complex32]) -> Complex3
 
 /// One octave of the multirate transform: its STFT and its sparse filter basis.
 struct Octave {
-    stft: FrameFft,
+    stft: Stft,
     /// Which signal (index into the halving cascade) this octave reads.
     signal: usize,
     /// Output column of this octave's first (lowest) filter.
@@ -669,7 +592,7 @@ impl CqtPlan {
                     starts.push(bins.len());
                 }
                 Octave {
-                    stft: FrameFft::new(s.n_fft, g.hop >> signal, None),
+                    stft: Stft::rectangular(s.n_fft, g.hop >> signal),
                     signal,
                     first_col: s.lo,
                     starts,
@@ -734,7 +657,7 @@ impl CqtPlan {
         }
         self.octaves
             .iter()
-            .map(|o| n_frames(lens[o.signal], o.stft.hop))
+            .map(|o| n_frames(lens[o.signal], o.stft.hop()))
             .min()
             .unwrap_or(0)
     }
@@ -768,7 +691,7 @@ impl CqtPlan {
         let t = self
             .octaves
             .iter()
-            .map(|o| n_frames(signals.get(o.signal).len(), o.stft.hop))
+            .map(|o| n_frames(signals.get(o.signal).len(), o.stft.hop()))
             .min()
             .unwrap_or(0);
         let cols = self.n_bins;

@@ -13,12 +13,15 @@ use crate::chroma;
 use crate::decode::AudioSource;
 use crate::error::{MusicError, Result};
 use crate::load::{Audio, load_many};
-use crate::mel::{self, N_FFT};
+use crate::mel::{self, MelFilterbank, N_FFT};
 use crate::mfcc::mfcc_from_mel_db;
 use crate::onset;
-use crate::stft::FrameMatrix;
+use crate::stft::{FrameMatrix, Stft, power_of};
+use crate::tuning;
+
 use crate::tcdiff;
 use crate::tempo;
+use rayon::prelude::*;
 
 /// Width of the EDGE/Lodge/FACT feature vector.
 pub const EDGE35_DIM: usize = 35;
@@ -107,50 +110,114 @@ pub fn sample_rate_for_fps(fps: u32) -> Result<u32> {
     }
 }
 
+/// Everything of the 35-dim features that does not depend on the beat prior.
+struct Edge35Analysis {
+    sr: f64,
+    env: Vec<f32>,
+    mfcc: FrameMatrix,
+    chroma: FrameMatrix,
+}
+
+impl Edge35Analysis {
+    fn compute(y: &[f32], sr: f64) -> Result<Self> {
+        // One 2048/512 Hann STFT feeds both the mel spectrogram (onset strength, MFCC) and
+        // chroma_cens's tuning estimate, which librosa computes from the very same STFT; the
+        // CQT's octave cascade is resampled meanwhile.
+        let t0 = std::time::Instant::now();
+        let mut mel_slot = None;
+        let chroma = chroma::chroma_cens_with_estimator(y, sr, HOP, 12, || {
+            let (mel, peaks) = mel_power_and_pitch_peaks(y, sr);
+            mel_slot = Some(mel);
+            tracing::debug!("timing: STFT for mel and tuning done at {:?}", t0.elapsed());
+            tuning::tuning_from_peaks(&peaks, tuning::TUNING_RESOLUTION, CHROMA_BINS_PER_OCTAVE)
+        })?;
+        tracing::debug!("timing: chroma_cens done at {:?}", t0.elapsed());
+        let mut db = mel_slot.expect("the tuning estimator always runs");
+        mel::power_to_db_in_place(&mut db.data, Some(80.0));
+        let env = onset::onset_strength_from_mel_db(&db, N_FFT, HOP);
+        let mfcc = mfcc_from_mel_db(&db, 20);
+        Ok(Self {
+            sr,
+            env,
+            mfcc,
+            chroma,
+        })
+    }
+
+    fn finish(self, fps: u32, start_bpm: StartBpm) -> MusicFeatures {
+        let Self {
+            sr,
+            env,
+            mfcc,
+            chroma,
+        } = self;
+        let onset_frames = onset::onset_detect(&env, sr, HOP);
+        let (tempo_bpm, beat_frames) =
+            beat::beat_track(&env, sr, HOP, start_bpm.bpm(), BEAT_TIGHTNESS, true);
+        let t = env.len();
+        debug_assert_eq!(mfcc.rows, t);
+        debug_assert_eq!(chroma.rows, t);
+        let mut features = FrameMatrix::zeros(t, EDGE35_DIM);
+        for (i, &e) in env.iter().enumerate() {
+            let row = features.row_mut(i);
+            row[0] = e;
+            row[1..21].copy_from_slice(mfcc.row(i));
+            row[21..33].copy_from_slice(chroma.row(i));
+        }
+        for &p in &onset_frames {
+            features.row_mut(p)[EDGE35_PEAK_COL] = 1.0;
+        }
+        for &b in &beat_frames {
+            features.row_mut(b)[EDGE35_BEAT_COL] = 1.0;
+        }
+        MusicFeatures {
+            fps,
+            start_bpm,
+            tempo_bpm,
+            beat_frames,
+            onset_frames,
+            features,
+        }
+    }
+}
+
+/// `chroma_cens`'s CQT resolution (librosa ≥ 0.10 default).
+const CHROMA_BINS_PER_OCTAVE: usize = 36;
+
+/// The mel power spectrogram (frames × 128) and `piptrack`'s pitch peaks from one STFT pass.
+fn mel_power_and_pitch_peaks(y: &[f32], sr: f64) -> (FrameMatrix, Vec<tuning::PitchPeak>) {
+    let stft = Stft::hann(N_FFT, HOP);
+    let fb = MelFilterbank::slaney(sr, N_FFT, mel::N_MELS);
+    let tracker = tuning::PitchTracker::new(sr, N_FFT);
+    let t = crate::stft::n_frames(y.len(), HOP);
+    let cols = fb.n_mels();
+    let mut mel = FrameMatrix::zeros(t, cols);
+    const CHUNK: usize = 128;
+    let peaks: Vec<Vec<tuning::PitchPeak>> = mel
+        .data
+        .par_chunks_mut(CHUNK * cols)
+        .enumerate()
+        .map(|(ci, rows)| {
+            let start = ci * CHUNK;
+            let end = (start + CHUNK).min(t);
+            let (mut mag, mut power, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
+            stft.for_each_frame(y, start..end, |ti, spec| {
+                power.clear();
+                power.extend(spec.iter().map(|&c| power_of(c)));
+                let r = ti - start;
+                fb.apply(&power, &mut rows[r * cols..(r + 1) * cols]);
+                tracker.frame_peaks(ti, spec, &mut mag, &mut peaks);
+            });
+            peaks
+        })
+        .collect();
+    (mel, peaks.concat())
+}
+
 /// The 35-dim features of a signal already at `fps · 512` Hz, with the given beat prior.
 pub fn edge35_from_signal(y: &[f32], fps: u32, start_bpm: StartBpm) -> Result<MusicFeatures> {
     let sr = sample_rate_for_fps(fps)? as f64;
-    // Onset strength and MFCC use the same mel power spectrogram (n_fft 2048, hop 512, 128
-    // Slaney mels); chroma_cens runs its own CQT. The two halves run on both cores.
-    let (mel_part, chroma) = rayon::join(
-        || {
-            let mut db = mel::mel_power(y, sr, HOP);
-            mel::power_to_db_in_place(&mut db.data, Some(80.0));
-            let env = onset::onset_strength_from_mel_db(&db, N_FFT, HOP);
-            let mfcc = mfcc_from_mel_db(&db, 20);
-            (env, mfcc)
-        },
-        || chroma::chroma_cens(y, sr, HOP, 12),
-    );
-    let (env, mfcc) = mel_part;
-    let chroma = chroma?;
-    let onset_frames = onset::onset_detect(&env, sr, HOP);
-    let (tempo_bpm, beat_frames) =
-        beat::beat_track(&env, sr, HOP, start_bpm.bpm(), BEAT_TIGHTNESS, true);
-    let t = env.len();
-    debug_assert_eq!(mfcc.rows, t);
-    debug_assert_eq!(chroma.rows, t);
-    let mut features = FrameMatrix::zeros(t, EDGE35_DIM);
-    for (i, &e) in env.iter().enumerate() {
-        let row = features.row_mut(i);
-        row[0] = e;
-        row[1..21].copy_from_slice(mfcc.row(i));
-        row[21..33].copy_from_slice(chroma.row(i));
-    }
-    for &p in &onset_frames {
-        features.row_mut(p)[EDGE35_PEAK_COL] = 1.0;
-    }
-    for &b in &beat_frames {
-        features.row_mut(b)[EDGE35_BEAT_COL] = 1.0;
-    }
-    Ok(MusicFeatures {
-        fps,
-        start_bpm,
-        tempo_bpm,
-        beat_frames,
-        onset_frames,
-        features,
-    })
+    Ok(Edge35Analysis::compute(y, sr)?.finish(fps, start_bpm))
 }
 
 /// EDGE/Lodge's start-BPM fallback on a signal loaded at 22050 Hz: `librosa.beat.tempo(y)`
@@ -196,9 +263,17 @@ pub fn extract_with_signal(
     match opts.set {
         FeatureSet::Edge35 => {
             let sr = sample_rate_for_fps(opts.fps)?;
+            let t0 = std::time::Instant::now();
             let (audio, y22) = load_with_prior(source, sr, opts.start_bpm)?;
-            let start = resolve_start_bpm(path, opts.start_bpm, y22.as_ref());
-            let f = edge35_from_signal(&audio.samples, opts.fps, start)?;
+            tracing::debug!("timing: load done at {:?}", t0.elapsed());
+            // The beat prior is only needed by the final beat tracking, so its 22050 Hz tempo
+            // estimate runs alongside the spectral analysis.
+            let (analysis, start) = rayon::join(
+                || Edge35Analysis::compute(&audio.samples, sr as f64),
+                || resolve_start_bpm(path, opts.start_bpm, y22.as_ref()),
+            );
+            let f = analysis?.finish(opts.fps, start);
+            tracing::debug!("timing: features done at {:?}", t0.elapsed());
             Ok((f, audio))
         }
         FeatureSet::Tcdiff438 => {

@@ -317,7 +317,7 @@ fn synthesize(
                 for (k, c) in spec.iter().enumerate() {
                     let (mh, mp) = p.masks(hrow[k], prow[k]);
                     // librosa: S, phase = magphase(D); (S * mask) * phase.
-                    let mag = c.norm();
+                    let mag = crate::stft::magnitude_of(*c);
                     let phase = if mag == 0.0 {
                         Complex32::new(1.0, 0.0)
                     } else {

@@ -1,7 +1,7 @@
 //! Slaney mel scale and filterbank (`librosa.filters.mel(htk=False, norm='slaney')`), the
 //! mel power spectrogram, and `power_to_db`.
 
-use crate::stft::{FrameMatrix, Stft};
+use crate::stft::{FrameMatrix, Stft, power_of};
 
 /// Slaney mel scale: linear below 1 kHz (200/3 Hz per mel), logarithmic above with a step of
 /// ln(6.4)/27 per mel (Slaney's Auditory Toolbox, librosa `hz_to_mel(htk=False)`).
@@ -118,10 +118,7 @@ pub fn mel_power(y: &[f32], sr: f64, hop: usize) -> FrameMatrix {
 pub fn mel_power_with(stft: &Stft, fb: &MelFilterbank, y: &[f32]) -> FrameMatrix {
     stft.map_frames(y, fb.n_mels(), |spec, row, power| {
         power.clear();
-        power.extend(spec.iter().map(|c| {
-            let m = c.norm();
-            m * m
-        }));
+        power.extend(spec.iter().map(|&c| power_of(c)));
         fb.apply(power, row);
     })
 }

@@ -20,8 +20,8 @@
 
 use rayon::prelude::*;
 
-use crate::cqt::FrameFft;
-use crate::stft::{FrameMatrix, hann_periodic, n_frames};
+use crate::stft::{FrameMatrix, Stft, n_frames};
+use realfft::num_complex::Complex32;
 
 /// `piptrack` defaults.
 pub const PIPTRACK_FMIN: f64 = 150.0;
@@ -162,47 +162,88 @@ fn pick_peaks(
     }
 }
 
+/// `piptrack`'s per-frame peak picking on complex STFT frames, with the default range
+/// (150–4000 Hz) and threshold 0.1, for callers that run the STFT themselves (the 35-dim
+/// pipeline shares one STFT between the mel spectrogram and the tuning estimate).
+#[derive(Clone, Debug)]
+pub struct PitchTracker {
+    sr: f64,
+    n_fft: usize,
+    n_bins: usize,
+    range: std::ops::Range<usize>,
+    /// Bins whose magnitude is needed: the range and one bin either side.
+    m_lo: usize,
+    m_hi: usize,
+}
+
+impl PitchTracker {
+    pub fn new(sr: f64, n_fft: usize) -> Self {
+        let n_bins = n_fft / 2 + 1;
+        let range = feasible_bins(n_bins, sr, n_fft, PIPTRACK_FMIN, PIPTRACK_FMAX);
+        let (m_lo, m_hi) = (range.start.saturating_sub(1), (range.end + 1).min(n_bins));
+        Self {
+            sr,
+            n_fft,
+            n_bins,
+            range,
+            m_lo,
+            m_hi,
+        }
+    }
+
+    /// Appends the peaks of STFT frame `frame` (`spec`, `1 + n_fft/2` bins) to `out`.
+    /// `mag` is scratch space.
+    pub fn frame_peaks(
+        &self,
+        frame: usize,
+        spec: &[Complex32],
+        mag: &mut Vec<f32>,
+        out: &mut Vec<PitchPeak>,
+    ) {
+        mag.resize(self.n_bins, 0.0);
+        // |X| as numpy's complex64 abs (hypotf = float64 sqrt of the float64 sum of squares,
+        // rounded once), without libm's slow hypot call. The column maximum comes from the
+        // squared magnitudes (rounding is monotonic, so max then sqrt is exact).
+        let mut max_sq = 0.0f64;
+        for c in spec {
+            let (re, im) = (c.re as f64, c.im as f64);
+            max_sq = max_sq.max(re * re + im * im);
+        }
+        for (m, c) in mag[self.m_lo..self.m_hi]
+            .iter_mut()
+            .zip(&spec[self.m_lo..self.m_hi])
+        {
+            let (re, im) = (c.re as f64, c.im as f64);
+            *m = (re * re + im * im).sqrt() as f32;
+        }
+        let colmax = max_sq.sqrt() as f32;
+        pick_peaks(
+            mag,
+            colmax,
+            self.range.clone(),
+            frame,
+            self.sr,
+            self.n_fft,
+            PIPTRACK_THRESHOLD,
+            out,
+        );
+    }
+}
+
 /// `librosa.piptrack(y=y, sr=sr, n_fft=n_fft, hop_length=hop)` with the default range
 /// (150–4000 Hz) and threshold 0.1, as a sparse list of peaks (frame-major, bins ascending).
 pub fn piptrack(y: &[f32], sr: f64, n_fft: usize, hop: usize) -> Vec<PitchPeak> {
-    let window = hann_periodic(n_fft).into_iter().map(|v| v as f32).collect();
-    let stft = FrameFft::new(n_fft, hop, Some(window));
-    let n_bins = stft.n_bins();
-    let range = feasible_bins(n_bins, sr, n_fft, PIPTRACK_FMIN, PIPTRACK_FMAX);
-    // Magnitudes are needed on the range and one bin either side; the column maximum comes
-    // from the squared magnitudes (rounding is monotonic, so max then sqrt is exact).
-    let (m_lo, m_hi) = (range.start.saturating_sub(1), (range.end + 1).min(n_bins));
+    let stft = Stft::hann(n_fft, hop);
+    let tracker = PitchTracker::new(sr, n_fft);
     let t = n_frames(y.len(), hop);
     const CHUNK: usize = 128;
     let chunks: Vec<Vec<PitchPeak>> = (0..t.div_ceil(CHUNK))
         .into_par_iter()
         .map(|ci| {
             let frames = ci * CHUNK..((ci + 1) * CHUNK).min(t);
-            let mut peaks = Vec::new();
-            let mut mag = vec![0.0f32; n_bins];
+            let (mut peaks, mut mag) = (Vec::new(), Vec::new());
             stft.for_each_frame(y, frames, |ti, spec| {
-                // |X| as numpy's complex64 abs (hypotf = float64 sqrt of the float64 sum of
-                // squares, rounded once), without libm's slow hypot call.
-                let mut max_sq = 0.0f64;
-                for c in spec {
-                    let (re, im) = (c.re as f64, c.im as f64);
-                    max_sq = max_sq.max(re * re + im * im);
-                }
-                for (m, c) in mag[m_lo..m_hi].iter_mut().zip(&spec[m_lo..m_hi]) {
-                    let (re, im) = (c.re as f64, c.im as f64);
-                    *m = (re * re + im * im).sqrt() as f32;
-                }
-                let colmax = max_sq.sqrt() as f32;
-                pick_peaks(
-                    &mag,
-                    colmax,
-                    range.clone(),
-                    ti,
-                    sr,
-                    n_fft,
-                    PIPTRACK_THRESHOLD,
-                    &mut peaks,
-                );
+                tracker.frame_peaks(ti, spec, &mut mag, &mut peaks)
             });
             peaks
         })
