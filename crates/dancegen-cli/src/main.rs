@@ -50,7 +50,9 @@ fn init_logging(verbose: u8, quiet: bool) {
         (false, 2) => "debug",
         _ => "trace",
     };
-    let others = if quiet { "error" } else { "warn" };
+    // Decoder libraries warn about harmless oddities (e.g. malformed Vorbis comments); show
+    // those only when asked for more output.
+    let others = if verbose == 0 { "error" } else { "warn" };
     let directives = format!("{others},dancegen={ours},dancegen_music={ours},dancegen_io={ours}");
     let filter = tracing_subscriber::EnvFilter::try_from_env("DANCEGEN_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(directives));
