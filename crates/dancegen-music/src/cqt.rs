@@ -696,28 +696,21 @@ impl CqtPlan {
             .unwrap_or(0);
         let cols = self.n_bins;
         let mut out = FrameMatrix::zeros(t, cols);
-        const CHUNK: usize = 64;
-        out.data
-            .par_chunks_mut(CHUNK * cols)
-            .enumerate()
-            .for_each(|(ci, rows)| {
-                let start = ci * CHUNK;
-                let end = (start + CHUNK).min(t);
-                for oct in &self.octaves {
-                    let y_oct = signals.get(oct.signal);
-                    oct.stft.for_each_frame(y_oct, start..end, |ti, spec| {
-                        let row = &mut rows[(ti - start) * cols..(ti - start + 1) * cols];
-                        let dst = &mut row[oct.first_col..oct.first_col + oct.n_filters()];
-                        for (k, o) in dst.iter_mut().enumerate() {
-                            let (a, b) = (oct.starts[k], oct.starts[k + 1]);
-                            let acc = sparse_dot(&oct.bins[a..b], &oct.coefs[a..b], spec);
-                            // |z| as numpy's complex64 abs (hypotf: float64 sqrt, one rounding).
-                            let (re, im) = (acc.re as f64, acc.im as f64);
-                            *o = (re * re + im * im).sqrt() as f32;
-                        }
-                    });
-                }
-            });
+        out.par_row_blocks(64, |frames, rows| {
+            let start = frames.start;
+            for oct in &self.octaves {
+                let y_oct = signals.get(oct.signal);
+                oct.stft.for_each_frame(y_oct, frames.clone(), |ti, spec| {
+                    let row = &mut rows[(ti - start) * cols..(ti - start + 1) * cols];
+                    let dst = &mut row[oct.first_col..oct.first_col + oct.n_filters()];
+                    for (k, o) in dst.iter_mut().enumerate() {
+                        let (a, b) = (oct.starts[k], oct.starts[k + 1]);
+                        let acc = sparse_dot(&oct.bins[a..b], &oct.coefs[a..b], spec);
+                        *o = crate::stft::magnitude_of(acc);
+                    }
+                });
+            }
+        });
         out
     }
 

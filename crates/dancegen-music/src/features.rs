@@ -21,7 +21,6 @@ use crate::tuning;
 
 use crate::tcdiff;
 use crate::tempo;
-use rayon::prelude::*;
 
 /// Width of the EDGE/Lodge/FACT feature vector.
 pub const EDGE35_DIM: usize = 35;
@@ -189,28 +188,20 @@ fn mel_power_and_pitch_peaks(y: &[f32], sr: f64) -> (FrameMatrix, Vec<tuning::Pi
     let stft = Stft::hann(N_FFT, HOP);
     let fb = MelFilterbank::slaney(sr, N_FFT, mel::N_MELS);
     let tracker = tuning::PitchTracker::new(sr, N_FFT);
-    let t = crate::stft::n_frames(y.len(), HOP);
     let cols = fb.n_mels();
-    let mut mel = FrameMatrix::zeros(t, cols);
-    const CHUNK: usize = 128;
-    let peaks: Vec<Vec<tuning::PitchPeak>> = mel
-        .data
-        .par_chunks_mut(CHUNK * cols)
-        .enumerate()
-        .map(|(ci, rows)| {
-            let start = ci * CHUNK;
-            let end = (start + CHUNK).min(t);
-            let (mut mag, mut power, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
-            stft.for_each_frame(y, start..end, |ti, spec| {
-                power.clear();
-                power.extend(spec.iter().map(|&c| power_of(c)));
-                let r = ti - start;
-                fb.apply(&power, &mut rows[r * cols..(r + 1) * cols]);
-                tracker.frame_peaks(ti, spec, &mut mag, &mut peaks);
-            });
-            peaks
-        })
-        .collect();
+    let mut mel = FrameMatrix::zeros(crate::stft::n_frames(y.len(), HOP), cols);
+    let peaks = mel.par_row_blocks(128, |frames, rows| {
+        let start = frames.start;
+        let (mut mag, mut power, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
+        stft.for_each_frame(y, frames, |ti, spec| {
+            power.clear();
+            power.extend(spec.iter().map(|&c| power_of(c)));
+            let r = ti - start;
+            fb.apply(&power, &mut rows[r * cols..(r + 1) * cols]);
+            tracker.frame_peaks(ti, spec, &mut mag, &mut peaks);
+        });
+        peaks
+    });
     (mel, peaks.concat())
 }
 

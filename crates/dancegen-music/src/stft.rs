@@ -35,6 +35,29 @@ impl FrameMatrix {
     pub fn get(&self, r: usize, c: usize) -> f32 {
         self.data[r * self.cols + c]
     }
+    /// Fills the matrix in parallel blocks of `block` rows: `f(first_row..end_row, rows)` gets
+    /// the block's rows as one slice and may return something per block (in block order).
+    /// Every frame-wise analysis (mel, CQT, fused mel + pitch peaks) is built this way, so
+    /// each worker reuses its FFT buffers across a block.
+    pub fn par_row_blocks<R: Send>(
+        &mut self,
+        block: usize,
+        f: impl Fn(std::ops::Range<usize>, &mut [f32]) -> R + Sync,
+    ) -> Vec<R> {
+        let (rows, cols) = (self.rows, self.cols);
+        if rows == 0 || cols == 0 {
+            return Vec::new();
+        }
+        self.data
+            .par_chunks_mut(block.max(1) * cols)
+            .enumerate()
+            .map(|(bi, data)| {
+                let start = bi * block.max(1);
+                f(start..(start + block.max(1)).min(rows), data)
+            })
+            .collect()
+    }
+
     /// The transpose, as a `(cols, rows)` row-major buffer (librosa's `(features, frames)` layout).
     pub fn transposed(&self) -> Vec<f32> {
         let mut out = vec![0.0; self.data.len()];
@@ -169,24 +192,15 @@ impl Stft {
         cols: usize,
         f: impl Fn(&[Complex32], &mut [f32], &mut Vec<f32>) + Sync,
     ) -> FrameMatrix {
-        let t = n_frames(y.len(), self.hop);
-        let mut out = FrameMatrix::zeros(t, cols);
-        if cols == 0 {
-            return out;
-        }
-        const CHUNK: usize = 256;
-        out.data
-            .par_chunks_mut(CHUNK * cols)
-            .enumerate()
-            .for_each(|(ci, rows)| {
-                let start = ci * CHUNK;
-                let end = (start + CHUNK).min(t);
-                let mut scratch = Vec::new();
-                self.for_each_frame(y, start..end, |ti, spec| {
-                    let r = ti - start;
-                    f(spec, &mut rows[r * cols..(r + 1) * cols], &mut scratch);
-                });
+        let mut out = FrameMatrix::zeros(n_frames(y.len(), self.hop), cols);
+        out.par_row_blocks(256, |frames, rows| {
+            let start = frames.start;
+            let mut scratch = Vec::new();
+            self.for_each_frame(y, frames, |ti, spec| {
+                let r = ti - start;
+                f(spec, &mut rows[r * cols..(r + 1) * cols], &mut scratch);
             });
+        });
         out
     }
 

@@ -16,47 +16,25 @@ use dancegen_music::stft::Stft;
 use dancegen_music::tuning::{estimate_tuning, piptrack_spectrogram};
 use dancegen_music::{FrameMatrix, HOP, load};
 
-/// A librosa `(features, frames)` float32 array → frame-major.
-///
-/// Honours the `.npy` `fortran_order` flag: arrays that came out of an `einsum`/BLAS product or
-/// the CQT's `order="F"` stack (`cqt_mag`, `chroma_cqt_raw`, `chroma_stft`) are stored
-/// column-major, which is already frame-major.
+/// A librosa `(features, frames)` array → frame-major.
 fn ref_matrix(path: &std::path::Path) -> FrameMatrix {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let data: Vec<f32> = npy.into_vec::<f32>().unwrap();
+    let (data, shape) = read_npy(path);
     let (f, t) = (shape[0], shape[1]);
-    if fortran {
-        return FrameMatrix {
-            rows: t,
-            cols: f,
-            data,
-        };
-    }
     let mut m = FrameMatrix::zeros(t, f);
     for i in 0..f {
         for j in 0..t {
-            m.data[j * f + i] = data[i * t + j];
+            m.data[j * f + i] = data[i * t + j] as f32;
         }
     }
     m
 }
 
-/// `tuning_bins_per_octave_36` from `meta.json`, parsed from its text with Rust's correctly
-/// rounded `f64` parser (serde_json's default float parser can be 1 ulp off, and the tuning is
-/// compared bit for bit).
+/// `tuning_bins_per_octave_36` from `meta.json` (compared bit for bit; the workspace builds
+/// serde_json with `float_roundtrip`, so the parse is correctly rounded).
 fn meta_tuning(dir: &std::path::Path) -> f64 {
-    let text = std::fs::read_to_string(dir.join("meta.json")).unwrap();
-    let key = "\"tuning_bins_per_octave_36\":";
-    let rest = &text[text.find(key).expect("tuning in meta.json") + key.len()..];
-    let num: String = rest
-        .trim_start()
-        .chars()
-        .take_while(|c| c.is_ascii_digit() || "+-.eE".contains(*c))
-        .collect();
-    num.parse().unwrap()
+    read_meta(dir)["tuning_bins_per_octave_36"]
+        .as_f64()
+        .unwrap()
 }
 
 /// Sorted absolute differences (for percentiles).

@@ -20,68 +20,10 @@ pub fn music_fixtures() -> PathBuf {
     shared_dir().join("fixtures/music")
 }
 
-/// Reads a numpy array as f64 values plus its shape, whatever its dtype (f32, f64, i64).
+/// Reads a numpy array (any numeric dtype, C or Fortran order) as C-order f64 plus its shape.
 pub fn read_npy(path: &Path) -> (Vec<f64>, Vec<usize>) {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
-    let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype();
-    let descr = match &dtype {
-        npyz::DType::Plain(t) => t.to_string(),
-        other => panic!("{}: unsupported dtype {other:?}", path.display()),
-    };
-    let data: Vec<f64> = match descr.as_str() {
-        "<f4" => npy
-            .into_vec::<f32>()
-            .unwrap()
-            .into_iter()
-            .map(f64::from)
-            .collect(),
-        "<f8" => npy.into_vec::<f64>().unwrap(),
-        "<i8" => npy
-            .into_vec::<i64>()
-            .unwrap()
-            .into_iter()
-            .map(|v| v as f64)
-            .collect(),
-        "|b1" => npy
-            .into_vec::<bool>()
-            .unwrap()
-            .into_iter()
-            .map(|v| v as u8 as f64)
-            .collect(),
-        d => panic!("{}: unsupported dtype {d}", path.display()),
-    };
-    // np.save keeps Fortran order for F-contiguous arrays (e.g. concatenated transposes).
-    let data = if fortran {
-        fortran_to_c(&data, &shape)
-    } else {
-        data
-    };
-    (data, shape)
-}
-
-fn fortran_to_c(data: &[f64], shape: &[usize]) -> Vec<f64> {
-    let n = data.len();
-    let mut out = vec![0.0; n];
-    let nd = shape.len();
-    let mut idx = vec![0usize; nd];
-    for (ci, o) in out.iter_mut().enumerate() {
-        // C-order multi-index of ci.
-        let mut rem = ci;
-        for d in (0..nd).rev() {
-            idx[d] = rem % shape[d];
-            rem /= shape[d];
-        }
-        // Fortran-order linear index.
-        let mut fi = 0;
-        for d in (0..nd).rev() {
-            fi = fi * shape[d] + idx[d];
-        }
-        *o = data[fi];
-    }
-    out
+    let a = dancegen_io::read_npy(path).unwrap_or_else(|e| panic!("{e}"));
+    (a.data, a.shape)
 }
 
 pub fn read_npy_f32(path: &Path) -> Vec<f32> {
