@@ -47,7 +47,7 @@ pub struct FeaturesArgs {
     /// Feature set.
     #[arg(long, value_enum, default_value_t = SetArg::Edge35)]
     pub set: SetArg,
-    /// EDGE test-time slicing: 5 s windows, 150 frames each; `.npy` becomes (N, 150, 35).
+    /// EDGE test-time slicing: 5 s windows (150 frames at 30 fps); `.npy` becomes (N, 150, 35).
     #[arg(long)]
     pub slice5s: bool,
     /// Stride between EDGE slices in seconds (EDGE test: 2.5, training: 0.5).

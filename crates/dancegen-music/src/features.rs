@@ -123,18 +123,25 @@ impl Edge35Analysis {
         // chroma_cens's tuning estimate, which librosa computes from the very same STFT; the
         // CQT's octave cascade is resampled meanwhile.
         let t0 = std::time::Instant::now();
-        let mut mel_slot = None;
-        let chroma = chroma::chroma_cens_with_estimator(y, sr, HOP, 12, || {
-            let (mel, peaks) = mel_power_and_pitch_peaks(y, sr);
-            mel_slot = Some(mel);
-            tracing::debug!("timing: STFT for mel and tuning done at {:?}", t0.elapsed());
-            tuning::tuning_from_peaks(&peaks, tuning::TUNING_RESOLUTION, CHROMA_BINS_PER_OCTAVE)
-        })?;
-        tracing::debug!("timing: chroma_cens done at {:?}", t0.elapsed());
-        let mut db = mel_slot.expect("the tuning estimator always runs");
-        mel::power_to_db_in_place(&mut db.data, Some(80.0));
-        let env = onset::onset_strength_from_mel_db(&db, N_FFT, HOP);
-        let mfcc = mfcc_from_mel_db(&db, 20);
+        let mut spectral: Option<(Vec<f32>, FrameMatrix)> = None;
+        let mut chroma = None;
+        rayon::scope(|scope| {
+            let spectral = &mut spectral;
+            chroma = Some(chroma::chroma_cens_with_estimator(y, sr, HOP, 12, || {
+                let (mut db, peaks) = mel_power_and_pitch_peaks(y, sr);
+                tracing::debug!("timing: STFT for mel and tuning done at {:?}", t0.elapsed());
+                // dB, onset strength and MFCC run while the CQT is computed.
+                scope.spawn(move |_| {
+                    mel::power_to_db_in_place(&mut db.data, Some(80.0));
+                    let env = onset::onset_strength_from_mel_db(&db, N_FFT, HOP);
+                    *spectral = Some((env, mfcc_from_mel_db(&db, 20)));
+                });
+                tuning::tuning_from_peaks(&peaks, tuning::TUNING_RESOLUTION, CHROMA_BINS_PER_OCTAVE)
+            }));
+        });
+        tracing::debug!("timing: chroma_cens and MFCC done at {:?}", t0.elapsed());
+        let chroma = chroma.expect("the scope ran")?;
+        let (env, mfcc) = spectral.expect("the tuning estimator always runs");
         Ok(Self {
             sr,
             env,

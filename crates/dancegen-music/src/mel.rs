@@ -127,16 +127,26 @@ pub fn mel_power_with(stft: &Stft, fb: &MelFilterbank, y: &[f32]) -> FrameMatrix
 /// then clamped from below at (global max − top_db). The clamp is over the whole matrix, so a
 /// slice of a song can differ from the same frames of the full song.
 pub fn power_to_db_in_place(s: &mut [f32], top_db: Option<f32>) {
+    use rayon::prelude::*;
     const AMIN: f32 = 1e-10;
-    let mut max = f32::NEG_INFINITY;
-    for v in s.iter_mut() {
-        *v = 10.0 * v.max(AMIN).log10();
-        max = max.max(*v);
-    }
+    const BLOCK: usize = 1 << 14;
+    let max = s
+        .par_chunks_mut(BLOCK)
+        .map(|c| {
+            let mut m = f32::NEG_INFINITY;
+            for v in c.iter_mut() {
+                *v = 10.0 * v.max(AMIN).log10();
+                m = m.max(*v);
+            }
+            m
+        })
+        .reduce(|| f32::NEG_INFINITY, f32::max);
     if let Some(top) = top_db {
         let floor = max - top;
-        for v in s.iter_mut() {
-            *v = v.max(floor);
-        }
+        s.par_chunks_mut(BLOCK).for_each(|c| {
+            for v in c {
+                *v = v.max(floor);
+            }
+        });
     }
 }

@@ -26,13 +26,14 @@ pub fn mfcc_from_mel_db(mel_db: &FrameMatrix, n_mfcc: usize) -> FrameMatrix {
     let n_mels = mel_db.cols;
     let basis = dct2_ortho_basis(n_mels, n_mfcc);
     let mut out = FrameMatrix::zeros(mel_db.rows, n_mfcc);
-    for t in 0..mel_db.rows {
-        let x = mel_db.row(t);
-        let row = out.row_mut(t);
-        for (k, o) in row.iter_mut().enumerate() {
-            let b = &basis[k * n_mels..(k + 1) * n_mels];
-            *o = x.iter().zip(b).map(|(&a, &w)| a as f64 * w).sum::<f64>() as f32;
+    out.par_row_blocks(512, |frames, rows| {
+        for (t, row) in frames.zip(rows.chunks_exact_mut(n_mfcc)) {
+            let x = mel_db.row(t);
+            for (k, o) in row.iter_mut().enumerate() {
+                let b = &basis[k * n_mels..(k + 1) * n_mels];
+                *o = x.iter().zip(b).map(|(&a, &w)| a as f64 * w).sum::<f64>() as f32;
+            }
         }
-    }
+    });
     out
 }
