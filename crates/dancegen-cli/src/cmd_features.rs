@@ -77,8 +77,21 @@ pub fn run(args: &FeaturesArgs, quiet: bool) -> Result<()> {
                 dancegen_io::write_npy_f32(&args.output, &[slices.len(), rows, dim], &data)?;
             }
             OutFormat::Json => {
+                // The contract keys describe the whole song (as without slicing); each slice's
+                // own tempo, beats and onsets are under `slices`.
+                let song = extract(
+                    &source,
+                    &ExtractOptions {
+                        fps: args.fps,
+                        set,
+                        start_bpm: args.start_bpm,
+                    },
+                )?;
                 let value = json!({
                     "fps": args.fps,
+                    "tempo_bpm": song.tempo_bpm,
+                    "beat_times": song.beat_times(),
+                    "onset_times": song.onset_times(),
                     "feature_set": "edge35",
                     "slice_seconds": 5.0,
                     "slice_stride_seconds": args.slice_stride,

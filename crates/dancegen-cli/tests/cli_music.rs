@@ -123,6 +123,30 @@ fn slices_and_tcdiff_shapes() {
     assert!(o.status.success(), "{}", stderr(&o));
     // 10 s, 5 s windows every 2.5 s: 0, 2.5, 5.
     assert_eq!(dancegen_io::read_npy(&out).unwrap().shape, vec![3, 150, 35]);
+    let out = dir.path().join("s.json");
+    let o = dancegen(&[
+        "-q",
+        "features",
+        clip.to_str().unwrap(),
+        "--slice5s",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    for key in [
+        "fps",
+        "tempo_bpm",
+        "beat_times",
+        "onset_times",
+        "features",
+        "slices",
+    ] {
+        assert!(v.get(key).is_some(), "slice JSON misses {key}");
+    }
+    assert_eq!(v["features"].as_array().unwrap().len(), 3);
+    assert_eq!(v["features"][0].as_array().unwrap().len(), 150);
     let out = dir.path().join("t.npy");
     let o = dancegen(&[
         "-q",

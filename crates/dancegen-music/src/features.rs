@@ -268,7 +268,11 @@ pub fn extract_with_signal(
             // estimate runs alongside the spectral analysis.
             let (analysis, start) = rayon::join(
                 || Edge35Analysis::compute(&audio.samples, sr as f64),
-                || resolve_start_bpm(path, opts.start_bpm, y22.as_ref()),
+                || {
+                    let b = resolve_start_bpm(path, opts.start_bpm, y22.as_ref());
+                    tracing::debug!("timing: beat prior done at {:?}", t0.elapsed());
+                    b
+                },
             );
             let f = analysis?.finish(opts.fps, start);
             tracing::debug!("timing: features done at {:?}", t0.elapsed());
