@@ -1,0 +1,17 @@
+//! Motion for dance generation: skeletons, rotations, forward kinematics, the research
+//! representations and the file formats animators and researchers use.
+//!
+//! This crate has no deep-learning dependencies. Conventions (axes, units, frame rates, the 6D
+//! rotation layout) are stated once, in [`conventions`]; importers and exporters convert at the
+//! edge.
+pub mod aistpp;
+pub mod bvh;
+pub mod conventions;
+pub mod fk;
+pub mod pickle;
+pub mod rotation;
+pub mod skeleton;
+
+pub use fk::{FkError, FkOutput, LocalRotations, forward_kinematics};
+pub use rotation::{Mat3, Quat};
+pub use skeleton::{Skeleton, SkeletonError};
