@@ -6,9 +6,13 @@
 //! edge.
 pub mod aistpp;
 pub mod bvh;
+pub mod bvh_motion;
 pub mod conventions;
 pub mod fk;
+pub mod gltf;
 pub mod pickle;
+pub mod repr;
+pub mod retarget;
 pub mod rotation;
 pub mod skeleton;
 

@@ -1,0 +1,628 @@
+//! glTF 2.0 binary (`.glb`) export of an animated skeleton with a simple skinned body.
+//!
+//! The file holds one node per joint (named after the joint, same order, so node `j` is joint
+//! `j`), a `skin` over those nodes, one animation and a skinned mesh made of one tapered capsule
+//! per bone, so the figure is visible in Blender, three.js, Unity (glTFast / UniGLTF) and the
+//! Khronos validator.
+//!
+//! # Conventions
+//! glTF is Y-up, right-handed, metres — the same frame as [`crate::conventions`], so positions
+//! and rotations are written unchanged. Only the quaternion layout differs: glTF stores
+//! `(x, y, z, w)`, dancegen's [`Quat`] is `(w, x, y, z)`; the writer reorders.
+//!
+//! - Node `j`'s rest translation is `skeleton.offsets()[j]`; the root node's rest translation is
+//!   `offsets()[0]` (the rest pelvis, zero for [`crate::Skeleton::smpl24`]). Rest rotations are
+//!   identity, so each joint's rest world transform is a pure translation to its rest position
+//!   (`offsets()[0]` plus the cumulative offsets) and the inverse bind matrices are the
+//!   negated translations.
+//! - The animation has one rotation channel per joint (the local axis-angle rotation, as a unit
+//!   quaternion made hemisphere-continuous over time so that component-wise interpolation in
+//!   Blender agrees with slerp) and one translation channel on the root node, whose values are
+//!   `root_translation` — the **pelvis world position** of [`crate::conventions`]. The animated
+//!   translation *replaces* the rest translation, so in every frame joint 0 is exactly at
+//!   `root_translation[t]` and every other joint where [`crate::forward_kinematics`] puts it.
+//!   Callers holding AIST++ `smpl_trans` must convert it first: pelvis world =
+//!   `pelvis_rest + smpl_trans / smpl_scaling` (shared data README).
+//! - Key times are `frame / fps` seconds, LINEAR interpolation.
+//! - Mesh vertices are in the rest pose (bind pose) and each capsule is weighted 100% to the
+//!   bone's parent joint (the joint whose rotation moves the bone).
+
+use crate::rotation::Quat;
+use crate::skeleton::Skeleton;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+/// Appearance of the exported figure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlbOptions {
+    /// Capsule radius at the parent end of each bone, metres (capped at 35% of the bone length).
+    pub bone_radius: f32,
+    /// Radius at the child end relative to the parent end (1 = cylinder).
+    pub taper: f32,
+    /// Sides of each capsule (at least 3).
+    pub sides: usize,
+    /// Linear RGBA base colour of the material.
+    pub base_color: [f32; 4],
+    /// Name of the animation (Blender shows it as the action name).
+    pub animation_name: String,
+}
+
+impl Default for GlbOptions {
+    fn default() -> Self {
+        GlbOptions {
+            bone_radius: 0.045,
+            taper: 0.7,
+            sides: 8,
+            base_color: [0.8, 0.45, 0.2, 1.0],
+            animation_name: "dance".to_string(),
+        }
+    }
+}
+
+/// Why the inputs cannot be exported.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GlbInputError {
+    #[error("motion has no frames (a single-frame pose is fine, zero frames is not)")]
+    NoFrames,
+    #[error(
+        "rotations have {len} values, not a multiple of {joints} joints × 3 (axis-angle, T×J×3)"
+    )]
+    RotationShape { len: usize, joints: usize },
+    #[error("{frames} frames of rotations but {got} root translation values (expected {expected})")]
+    TranslationShape {
+        frames: usize,
+        got: usize,
+        expected: usize,
+    },
+    #[error("{what} value {index} is not finite ({value})")]
+    NonFinite {
+        what: &'static str,
+        index: usize,
+        value: f32,
+    },
+    #[error("fps must be finite and positive, got {0}")]
+    BadFps(f32),
+    #[error("too many frames ({frames}) at {fps} fps: key times are not strictly increasing")]
+    TimesNotIncreasing { frames: usize, fps: f32 },
+    #[error("bad options: {0}")]
+    Options(String),
+}
+
+/// A `.glb` that could not be written; both variants name the path.
+#[derive(Debug, thiserror::Error)]
+pub enum GltfError {
+    #[error("{path}: cannot export glTF: {reason}")]
+    Input {
+        path: PathBuf,
+        reason: GlbInputError,
+    },
+    #[error(transparent)]
+    Write(#[from] dancegen_io::atomic::WriteError),
+}
+
+/// Writes the motion as a `.glb` file, atomically (see the module docs for the layout).
+///
+/// `local_rotations_axis_angle` is `T×J×3` (radians, parent-relative), `root_translation` is
+/// `T×3` (metres, pelvis world position), `fps` the frame rate stored with the motion.
+pub fn write_glb(
+    path: impl AsRef<Path>,
+    skeleton: &Skeleton,
+    local_rotations_axis_angle: &[f32],
+    root_translation: &[f32],
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<(), GltfError> {
+    let path = path.as_ref();
+    let bytes = glb_bytes(
+        skeleton,
+        local_rotations_axis_angle,
+        root_translation,
+        fps,
+        opts,
+    )
+    .map_err(|reason| GltfError::Input {
+        path: path.to_path_buf(),
+        reason,
+    })?;
+    dancegen_io::write_atomic(path, |w| w.write_all(&bytes))?;
+    Ok(())
+}
+
+/// The `.glb` file contents for [`write_glb`].
+pub fn glb_bytes(
+    skeleton: &Skeleton,
+    local_rotations_axis_angle: &[f32],
+    root_translation: &[f32],
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, GlbInputError> {
+    let joints = skeleton.len();
+    let rot = local_rotations_axis_angle;
+    if rot.len() % (joints * 3) != 0 {
+        return Err(GlbInputError::RotationShape {
+            len: rot.len(),
+            joints,
+        });
+    }
+    let frames = rot.len() / (joints * 3);
+    if frames == 0 {
+        return Err(GlbInputError::NoFrames);
+    }
+    if root_translation.len() != frames * 3 {
+        return Err(GlbInputError::TranslationShape {
+            frames,
+            got: root_translation.len(),
+            expected: frames * 3,
+        });
+    }
+    check_finite("rotation", rot)?;
+    check_finite("root translation", root_translation)?;
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(GlbInputError::BadFps(fps));
+    }
+    if opts.sides < 3 {
+        return Err(GlbInputError::Options(format!(
+            "sides must be at least 3, got {}",
+            opts.sides
+        )));
+    }
+    let positive = |v: f32| v.is_finite() && v > 0.0;
+    if !positive(opts.bone_radius) || !positive(opts.taper) {
+        return Err(GlbInputError::Options(format!(
+            "bone_radius and taper must be finite and positive, got {} and {}",
+            opts.bone_radius, opts.taper
+        )));
+    }
+    if opts.base_color.iter().any(|c| !(0.0..=1.0).contains(c)) {
+        return Err(GlbInputError::Options(format!(
+            "base_color components must lie in [0, 1], got {:?}",
+            opts.base_color
+        )));
+    }
+
+    let times: Vec<f32> = (0..frames)
+        .map(|f| (f as f64 / fps as f64) as f32)
+        .collect();
+    if times.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(GlbInputError::TimesNotIncreasing { frames, fps });
+    }
+
+    // Rest world positions (rest rotations are identity).
+    let parents = skeleton.parents();
+    let offsets = skeleton.offsets();
+    let mut rest = Vec::with_capacity(joints);
+    for j in 0..joints {
+        rest.push(match parents[j] {
+            None => offsets[j],
+            Some(p) => add(rest[p], offsets[j]),
+        });
+    }
+    let mesh = build_mesh(skeleton, &rest, opts);
+
+    let mut bin = BinBuilder::default();
+    let mut accessors: Vec<Value> = Vec::new();
+    let mut views: Vec<Value> = Vec::new();
+
+    // Mesh attributes.
+    let (pos_min, pos_max) = min_max3(&mesh.positions);
+    let pos = bin.view(&mut views, &f32_bytes(&mesh.positions), Some(ARRAY_BUFFER));
+    accessors.push(
+        json!({"bufferView": pos, "componentType": FLOAT, "count": mesh.vertex_count(),
+        "type": "VEC3", "min": pos_min, "max": pos_max}),
+    );
+    let pos_acc = accessors.len() - 1;
+    let nrm = bin.view(&mut views, &f32_bytes(&mesh.normals), Some(ARRAY_BUFFER));
+    accessors.push(
+        json!({"bufferView": nrm, "componentType": FLOAT, "count": mesh.vertex_count(),
+        "type": "VEC3"}),
+    );
+    let nrm_acc = accessors.len() - 1;
+    let (joint_bytes, joint_type) = if joints <= 256 {
+        (
+            mesh.joints
+                .iter()
+                .flat_map(|&j| [j as u8, 0, 0, 0])
+                .collect::<Vec<u8>>(),
+            UNSIGNED_BYTE,
+        )
+    } else {
+        (
+            mesh.joints
+                .iter()
+                .flat_map(|&j| [j, 0, 0, 0])
+                .flat_map(u16::to_le_bytes)
+                .collect(),
+            UNSIGNED_SHORT,
+        )
+    };
+    let jv = bin.view(&mut views, &joint_bytes, Some(ARRAY_BUFFER));
+    accessors.push(json!({"bufferView": jv, "componentType": joint_type,
+        "count": mesh.vertex_count(), "type": "VEC4"}));
+    let joints_acc = accessors.len() - 1;
+    let weights: Vec<f32> = (0..mesh.vertex_count())
+        .flat_map(|_| [1.0f32, 0.0, 0.0, 0.0])
+        .collect();
+    let wv = bin.view(&mut views, &f32_bytes(&weights), Some(ARRAY_BUFFER));
+    accessors.push(json!({"bufferView": wv, "componentType": FLOAT,
+        "count": mesh.vertex_count(), "type": "VEC4"}));
+    let weights_acc = accessors.len() - 1;
+    let (index_bytes, index_type) = if mesh.vertex_count() <= u16::MAX as usize {
+        (
+            mesh.indices
+                .iter()
+                .flat_map(|&i| (i as u16).to_le_bytes())
+                .collect::<Vec<u8>>(),
+            UNSIGNED_SHORT,
+        )
+    } else {
+        (
+            mesh.indices.iter().flat_map(|&i| i.to_le_bytes()).collect(),
+            UNSIGNED_INT,
+        )
+    };
+    let iv = bin.view(&mut views, &index_bytes, Some(ELEMENT_ARRAY_BUFFER));
+    accessors.push(json!({"bufferView": iv, "componentType": index_type,
+        "count": mesh.indices.len(), "type": "SCALAR"}));
+    let index_acc = accessors.len() - 1;
+
+    // Inverse bind matrices: column-major inverse of the rest world transform.
+    let ibm: Vec<f32> = rest
+        .iter()
+        .flat_map(|p| {
+            let t = p.map(|v| -(v as f32));
+            [
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, t[0], t[1], t[2], 1.0,
+            ]
+        })
+        .collect();
+    let ibmv = bin.view(&mut views, &f32_bytes(&ibm), None);
+    accessors.push(
+        json!({"bufferView": ibmv, "componentType": FLOAT, "count": joints,
+        "type": "MAT4"}),
+    );
+    let ibm_acc = accessors.len() - 1;
+
+    // Animation.
+    let tv = bin.view(&mut views, &f32_bytes(&times), None);
+    accessors.push(
+        json!({"bufferView": tv, "componentType": FLOAT, "count": frames,
+        "type": "SCALAR", "min": [f64::from(times[0])], "max": [f64::from(times[frames - 1])]}),
+    );
+    let time_acc = accessors.len() - 1;
+    // Joint-major quaternions (x, y, z, w), one accessor per joint into a shared view.
+    let mut quats = vec![0f32; joints * frames * 4];
+    for j in 0..joints {
+        let mut prev: Option<Quat> = None;
+        for f in 0..frames {
+            let a = &rot[(f * joints + j) * 3..][..3];
+            let mut q = Quat::from_axis_angle([a[0] as f64, a[1] as f64, a[2] as f64]).normalize();
+            if let Some(p) = prev
+                && p.dot(q) < 0.0
+            {
+                q = -q;
+            }
+            prev = Some(q);
+            quats[(j * frames + f) * 4..][..4]
+                .copy_from_slice(&[q.x as f32, q.y as f32, q.z as f32, q.w as f32]);
+        }
+    }
+    let qv = bin.view(&mut views, &f32_bytes(&quats), None);
+    let first_rot_acc = accessors.len();
+    for j in 0..joints {
+        accessors.push(json!({"bufferView": qv, "byteOffset": j * frames * 16,
+            "componentType": FLOAT, "count": frames, "type": "VEC4"}));
+    }
+    let trv = bin.view(&mut views, &f32_bytes(root_translation), None);
+    accessors.push(
+        json!({"bufferView": trv, "componentType": FLOAT, "count": frames,
+        "type": "VEC3"}),
+    );
+    let trans_acc = accessors.len() - 1;
+
+    let mut samplers = Vec::with_capacity(joints + 1);
+    let mut channels = Vec::with_capacity(joints + 1);
+    for j in 0..joints {
+        samplers.push(json!({"input": time_acc, "output": first_rot_acc + j,
+            "interpolation": "LINEAR"}));
+        channels.push(json!({"sampler": j, "target": {"node": j, "path": "rotation"}}));
+    }
+    samplers.push(json!({"input": time_acc, "output": trans_acc, "interpolation": "LINEAR"}));
+    channels.push(json!({"sampler": joints, "target": {"node": 0, "path": "translation"}}));
+
+    // Nodes: joints 0..J, then the mesh node (a scene root without a transform, as the
+    // validator recommends for skinned meshes).
+    let mut nodes: Vec<Value> = (0..joints)
+        .map(|j| {
+            let mut n = json!({"name": skeleton.names()[j],
+                "translation": offsets[j].map(|v| f64::from(v as f32))});
+            let children: Vec<usize> = (j + 1..joints).filter(|&c| parents[c] == Some(j)).collect();
+            if !children.is_empty() {
+                n["children"] = json!(children);
+            }
+            n
+        })
+        .collect();
+    nodes.push(json!({"name": "body", "mesh": 0, "skin": 0}));
+
+    let c = opts.base_color;
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "dancegen"},
+        "scene": 0,
+        "scenes": [{"name": "dancegen", "nodes": [0, joints]}],
+        "nodes": nodes,
+        "skins": [{"name": "skeleton", "joints": (0..joints).collect::<Vec<_>>(),
+            "skeleton": 0, "inverseBindMatrices": ibm_acc}],
+        "meshes": [{"name": "body", "primitives": [{
+            "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc,
+                "JOINTS_0": joints_acc, "WEIGHTS_0": weights_acc},
+            "indices": index_acc, "material": 0, "mode": 4}]}],
+        "materials": [{"name": "body", "pbrMetallicRoughness": {
+            "baseColorFactor": c.map(f64::from), "metallicFactor": 0.0, "roughnessFactor": 0.8}}],
+        "animations": [{"name": opts.animation_name, "samplers": samplers, "channels": channels}],
+        "buffers": [{"byteLength": bin.data.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    Ok(assemble_glb(
+        serde_json::to_vec(&doc).expect("JSON of plain values"),
+        bin.data,
+    ))
+}
+
+const FLOAT: u32 = 5126;
+const UNSIGNED_BYTE: u32 = 5121;
+const UNSIGNED_SHORT: u32 = 5123;
+const UNSIGNED_INT: u32 = 5125;
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+const GLB_MAGIC: u32 = 0x4654_6C67;
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+fn assemble_glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    for v in [GLB_MAGIC, 2, total as u32, json.len() as u32, CHUNK_JSON] {
+        out.extend(v.to_le_bytes());
+    }
+    out.extend(&json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(CHUNK_BIN.to_le_bytes());
+    out.extend(&bin);
+    out
+}
+
+/// The binary buffer, each view starting at a multiple of 4.
+#[derive(Default)]
+struct BinBuilder {
+    data: Vec<u8>,
+}
+
+impl BinBuilder {
+    fn view(&mut self, views: &mut Vec<Value>, bytes: &[u8], target: Option<u32>) -> usize {
+        while self.data.len() % 4 != 0 {
+            self.data.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.data.extend_from_slice(bytes);
+        views.push(v);
+        views.len() - 1
+    }
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn check_finite(what: &'static str, v: &[f32]) -> Result<(), GlbInputError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(GlbInputError::NonFinite {
+            what,
+            index,
+            value: v[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+fn min_max3(v: &[f32]) -> (Vec<f64>, Vec<f64>) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in v.chunks_exact(3) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (
+        lo.iter().map(|&x| f64::from(x)).collect(),
+        hi.iter().map(|&x| f64::from(x)).collect(),
+    )
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    a.map(|v| v * s)
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// The bind-pose body: one capsule per bone.
+struct Mesh {
+    positions: Vec<f32>,
+    normals: Vec<f32>,
+    /// Joint of each vertex.
+    joints: Vec<u16>,
+    indices: Vec<u32>,
+}
+
+impl Mesh {
+    fn vertex_count(&self) -> usize {
+        self.joints.len()
+    }
+
+    fn push(&mut self, p: [f64; 3], n: [f64; 3], joint: usize) -> u32 {
+        self.positions.extend(p.map(|v| v as f32));
+        self.normals.extend(n.map(|v| v as f32));
+        self.joints.push(joint as u16);
+        (self.joints.len() - 1) as u32
+    }
+}
+
+/// Latitudes (radians) of the capsule rings: three on the parent-end hemisphere (including its
+/// equator), three on the child-end one.
+const CAP_LATITUDES: [f64; 3] = [
+    -std::f64::consts::FRAC_PI_3,
+    -std::f64::consts::FRAC_PI_6,
+    0.0,
+];
+
+fn build_mesh(skeleton: &Skeleton, rest: &[[f64; 3]], opts: &GlbOptions) -> Mesh {
+    let mut m = Mesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        joints: Vec::new(),
+        indices: Vec::new(),
+    };
+    let sides = opts.sides;
+    for (j, parent) in skeleton.parents().iter().enumerate() {
+        let Some(p) = *parent else { continue };
+        let (a, b) = (rest[p], rest[j]);
+        let d = sub(b, a);
+        let len = norm(d);
+        if len < 1e-6 {
+            continue;
+        }
+        let axis = scale(d, 1.0 / len);
+        // Any unit vector perpendicular to the axis, then v = axis × u so that (u, v, axis)
+        // is right-handed.
+        let helper = if axis[1].abs() < 0.9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+        let u = cross(helper, axis);
+        let u = scale(u, 1.0 / norm(u));
+        let v = cross(axis, u);
+        let r0 = (opts.bone_radius as f64).min(0.35 * len);
+        let r1 = r0 * opts.taper as f64;
+        // Rings from the parent-end pole to the child-end pole.
+        let mut rings: Vec<([f64; 3], f64, f64)> = Vec::new(); // (centre, radius, latitude)
+        for &lat in &CAP_LATITUDES {
+            rings.push((a, r0, lat));
+        }
+        for &lat in CAP_LATITUDES.iter().rev() {
+            rings.push((b, r1, -lat));
+        }
+        let start_pole = m.push(add(a, scale(axis, -r0)), scale(axis, -1.0), p);
+        let first = m.joints.len() as u32;
+        for &(c, r, lat) in &rings {
+            for s in 0..sides {
+                let th = std::f64::consts::TAU * s as f64 / sides as f64;
+                let radial = add(scale(u, th.cos()), scale(v, th.sin()));
+                let n = add(scale(radial, lat.cos()), scale(axis, lat.sin()));
+                m.push(add(c, scale(n, r)), n, p);
+            }
+        }
+        let end_pole = m.push(add(b, scale(axis, r1)), axis, p);
+        let s = sides as u32;
+        let at = |ring: u32, side: u32| first + ring * s + side % s;
+        for side in 0..s {
+            m.indices.extend([start_pole, at(0, side + 1), at(0, side)]);
+            for ring in 0..rings.len() as u32 - 1 {
+                let (a0, b0) = (at(ring, side), at(ring, side + 1));
+                let (c0, d0) = (at(ring + 1, side + 1), at(ring + 1, side));
+                m.indices.extend([a0, b0, c0, a0, c0, d0]);
+            }
+            let last = rings.len() as u32 - 1;
+            m.indices
+                .extend([at(last, side), at(last, side + 1), end_pole]);
+        }
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangles_face_outwards() {
+        let sk = Skeleton::smpl24();
+        let rest = sk.rest_positions();
+        let m = build_mesh(&sk, &rest, &GlbOptions::default());
+        assert_eq!(m.vertex_count(), 23 * (6 * 8 + 2));
+        let p = |i: u32| {
+            let k = i as usize * 3;
+            [0, 1, 2].map(|c| m.positions[k + c] as f64)
+        };
+        let n = |i: u32| {
+            let k = i as usize * 3;
+            [0, 1, 2].map(|c| m.normals[k + c] as f64)
+        };
+        for t in m.indices.chunks_exact(3) {
+            let face = cross(sub(p(t[1]), p(t[0])), sub(p(t[2]), p(t[0])));
+            let avg = add(add(n(t[0]), n(t[1])), n(t[2]));
+            let dot: f64 = (0..3).map(|k| face[k] * avg[k]).sum();
+            assert!(dot > 0.0, "triangle {t:?} faces inwards");
+        }
+        for i in 0..m.vertex_count() as u32 {
+            assert!((norm(n(i)) - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn rejects_bad_inputs() {
+        let sk = Skeleton::smpl24();
+        let o = GlbOptions::default();
+        assert_eq!(
+            glb_bytes(&sk, &[], &[], 30.0, &o),
+            Err(GlbInputError::NoFrames)
+        );
+        let rot = vec![0.0f32; 24 * 3];
+        assert!(matches!(
+            glb_bytes(&sk, &rot[1..], &[0.0; 3], 30.0, &o),
+            Err(GlbInputError::RotationShape { .. })
+        ));
+        assert!(matches!(
+            glb_bytes(&sk, &rot, &[0.0; 6], 30.0, &o),
+            Err(GlbInputError::TranslationShape { .. })
+        ));
+        assert!(matches!(
+            glb_bytes(&sk, &rot, &[0.0, f32::NAN, 0.0], 30.0, &o),
+            Err(GlbInputError::NonFinite { index: 1, .. })
+        ));
+        assert_eq!(
+            glb_bytes(&sk, &rot, &[0.0; 3], 0.0, &o),
+            Err(GlbInputError::BadFps(0.0))
+        );
+        assert!(glb_bytes(&sk, &rot, &[0.0; 3], 30.0, &o).is_ok());
+    }
+}

@@ -1,0 +1,291 @@
+//! HumanML3D-style 263-dim body vector for the SMPL 22-joint body (the body part of SoulNet's
+//! HumanTOMATO-style 623 / 723, anchors.md C.6; layout and steps of
+//! `EricGuo5513/HumanML3D:motion_representation.ipynb` `process_file` / `recover_from_ric`).
+//!
+//! Canonicalisation of the whole clip (world joints from FK, joints 0–21, Y-up):
+//! 1. floor: subtract the minimum y over all joints and frames;
+//! 2. subtract frame 0's root x, z;
+//! 3. rotate about Y so frame 0 faces +Z: across = (r_hip − l_hip) + (r_shoulder − l_shoulder)
+//!    (joints 2, 1, 17, 16), forward = up × across.
+//!
+//! Per-frame heading `r_rot[t]`: the Y rotation taking forward (same rule, Gaussian-smoothed over
+//! time with σ = 20 frames, scipy `gaussian_filter1d` mode `nearest`) to +Z, made
+//! sign-continuous over time (`qfix`).
+//!
+//! Per frame `t < T − 1` (the output has **T − 1** frames):
+//!
+//! | dims | content |
+//! |---|---|
+//! | 0 | root rotation velocity: `asin(y)` of `r_rot[t+1] · r_rot[t]⁻¹` (half the yaw step) |
+//! | 1..3 | root linear velocity x, z: `r_rot[t+1] (p₀[t+1] − p₀[t])` |
+//! | 3 | root y |
+//! | 4..67 | ric: joints 1–21 relative to the root's x, z, rotated by `r_rot[t]` (21 × 3) |
+//! | 67..193 | rot: joints 1–21 local rotations as **continuous 6D = first two columns** (HumanML3D `quaternion_to_cont6d_np`; *not* EDGE's rows) (21 × 6) |
+//! | 193..259 | local velocity: `r_rot[t] (p_j[t+1] − p_j[t])`, joints 0–21 (22 × 3) |
+//! | 259..263 | foot contacts l-ankle 7, l-toe 10, r-ankle 8, r-toe 11: squared displacement per frame < 0.002 m² |
+//!
+//! Differences from HumanML3D: no skeleton "uniformisation" (the EDGE SMPL offsets are used as
+//! they are), and `rot` holds the **true SMPL local rotations** instead of HumanML3D's
+//! twist-free IK; HumanML3D runs at 20 fps, here the motion's own rate is kept (the 0.002
+//! threshold is per frame). The 52-joint 623 and the face-extended 723 are not implemented.
+
+use super::motion::{POSE_DIMS, SMPL_JOINTS};
+use super::{ReprError, SmplMotion, frames_of};
+use crate::rotation::{Mat3, Quat};
+use crate::skeleton::SMPL24_OFFSETS;
+
+/// Body joints of the representation (SMPL 0–21).
+pub const JOINTS: usize = 22;
+/// HumanML3D's foot-contact threshold on the squared per-frame displacement (m²).
+pub const CONTACT_SQ_THRESHOLD: f64 = 0.002;
+/// σ (frames) of the heading smoothing.
+pub const HEADING_SIGMA: f64 = 20.0;
+
+/// The HumanML3D-style 263-dim representation; see the module documentation.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct HumanMl263;
+
+/// Encoder output with the intermediate quantities, for checks and visualisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanMl263Parts {
+    /// `(T − 1, 263)`.
+    pub data: Vec<f32>,
+    /// `(T, 22, 3)` canonicalised world joints (steps 1–3).
+    pub positions: Vec<f64>,
+    /// `(T,)` heading quaternions `r_rot`.
+    pub heading: Vec<Quat>,
+}
+
+type V3 = [f64; 3];
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn normalize(a: V3) -> V3 {
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt().max(1e-12);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// `qbetween_np(v, +Z)`: shortest rotation taking `v` to +Z.
+fn qbetween_to_z(v: V3) -> Quat {
+    let t = [0.0, 0.0, 1.0];
+    let c = cross(v, t);
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    Quat::new(n + v[2], c[0], c[1], c[2]).normalize()
+}
+
+fn forward(p: &[f64], t: usize) -> V3 {
+    let j = |k: usize| {
+        let o = (t * JOINTS + k) * 3;
+        [p[o], p[o + 1], p[o + 2]]
+    };
+    let across = normalize(
+        sub(j(2), j(1))
+            .iter()
+            .zip(sub(j(17), j(16)))
+            .map(|(a, b)| a + b)
+            .collect::<Vec<_>>()
+            .try_into()
+            .unwrap_or([0.0; 3]),
+    );
+    cross([0.0, 1.0, 0.0], across)
+}
+
+/// scipy `gaussian_filter1d(x, sigma, mode='nearest', truncate=4)` on a sequence of vectors.
+fn gaussian_smooth(x: &[V3], sigma: f64) -> Vec<V3> {
+    let r = (4.0 * sigma + 0.5) as i64;
+    let w: Vec<f64> = (-r..=r)
+        .map(|i| (-0.5 * (i as f64 / sigma).powi(2)).exp())
+        .collect();
+    let s: f64 = w.iter().sum();
+    let n = x.len() as i64;
+    (0..n)
+        .map(|t| {
+            let mut acc = [0.0; 3];
+            for (k, wk) in w.iter().enumerate() {
+                let idx = (t + k as i64 - r).clamp(0, n - 1) as usize;
+                for c in 0..3 {
+                    acc[c] += wk / s * x[idx][c];
+                }
+            }
+            acc
+        })
+        .collect()
+}
+
+impl HumanMl263 {
+    /// Values per frame.
+    pub const DIMS: usize = 263;
+
+    /// Encodes to `(T − 1, 263)`.
+    pub fn encode(m: &SmplMotion) -> Result<Vec<f32>, ReprError> {
+        Ok(Self::encode_parts(m)?.data)
+    }
+
+    /// Encodes and returns the intermediate quantities too.
+    pub fn encode_parts(m: &SmplMotion) -> Result<HumanMl263Parts, ReprError> {
+        let t = m.validate()?;
+        if t < 2 {
+            return Err(ReprError::Invalid(
+                "HumanMl263 needs at least 2 frames".into(),
+            ));
+        }
+        let j24 = m.joints_world()?;
+        let mut p: Vec<f64> = j24
+            .chunks_exact(SMPL_JOINTS * 3)
+            .flat_map(|f| f[..JOINTS * 3].iter().map(|&v| v as f64))
+            .collect();
+        // 1. floor, 2. frame-0 root xz at origin, 3. face +Z at frame 0.
+        let floor = p
+            .iter()
+            .skip(1)
+            .step_by(3)
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let (x0, z0) = (p[0], p[2]);
+        for v in p.chunks_exact_mut(3) {
+            v[0] -= x0;
+            v[1] -= floor;
+            v[2] -= z0;
+        }
+        let q_init = qbetween_to_z(normalize(forward(&p, 0)));
+        for v in p.chunks_exact_mut(3) {
+            let r = q_init.rotate([v[0], v[1], v[2]]);
+            v.copy_from_slice(&r);
+        }
+        let fwd: Vec<V3> = (0..t).map(|f| forward(&p, f)).collect();
+        let mut heading: Vec<Quat> = gaussian_smooth(&fwd, HEADING_SIGMA)
+            .into_iter()
+            .map(|v| qbetween_to_z(normalize(v)))
+            .collect();
+        // HumanML3D `qfix`: sign-continuous quaternions, so `asin(y)` of the step has the
+        // right sign when the heading passes through −Z.
+        for f in 1..t {
+            if heading[f].dot(heading[f - 1]) < 0.0 {
+                heading[f] = -heading[f];
+            }
+        }
+        let pj = |f: usize, k: usize| -> V3 {
+            let o = (f * JOINTS + k) * 3;
+            [p[o], p[o + 1], p[o + 2]]
+        };
+        let mut data = Vec::with_capacity((t - 1) * Self::DIMS);
+        for f in 0..t - 1 {
+            let (r0, r1) = (heading[f], heading[f + 1]);
+            let rv = r1 * r0.conjugate();
+            data.push(rv.y.clamp(-1.0, 1.0).asin() as f32);
+            let v = r1.rotate(sub(pj(f + 1, 0), pj(f, 0)));
+            data.extend([v[0] as f32, v[2] as f32]);
+            let root = pj(f, 0);
+            data.push(root[1] as f32);
+            for k in 1..JOINTS {
+                let q = pj(f, k);
+                let ric = r0.rotate([q[0] - root[0], q[1], q[2] - root[2]]);
+                data.extend(ric.map(|v| v as f32));
+            }
+            for k in 1..JOINTS {
+                let r = Mat3::from_axis_angle(m.joint_aa(f, k).map(f64::from));
+                data.extend(r.transpose().to_6d().map(|v| v as f32));
+            }
+            for k in 0..JOINTS {
+                let lv = r0.rotate(sub(pj(f + 1, k), pj(f, k)));
+                data.extend(lv.map(|v| v as f32));
+            }
+            for k in [7, 10, 8, 11] {
+                let d = sub(pj(f + 1, k), pj(f, k));
+                let sq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                data.push(if sq < CONTACT_SQ_THRESHOLD { 1.0 } else { 0.0 });
+            }
+        }
+        Ok(HumanMl263Parts {
+            data,
+            positions: p,
+            heading,
+        })
+    }
+
+    /// HumanML3D `recover_from_ric`: world joints `(T', 22, 3)` from `(T', 263)`, in the frame
+    /// whose initial heading is the identity (i.e. the canonical positions rotated by
+    /// `heading[0]`).
+    pub fn decode_joints(data: &[f32]) -> Result<Vec<f32>, ReprError> {
+        let t = frames_of("HumanMl263::decode_joints", data, Self::DIMS)?;
+        let mut out = Vec::with_capacity(t * JOINTS * 3);
+        let mut ang = 0.0f64;
+        let mut pos = [0.0f64; 3];
+        for f in 0..t {
+            let row = &data[f * Self::DIMS..(f + 1) * Self::DIMS];
+            if f > 0 {
+                let prev = &data[(f - 1) * Self::DIMS..f * Self::DIMS];
+                ang += prev[0] as f64;
+            }
+            let q = Quat::new(ang.cos(), 0.0, ang.sin(), 0.0);
+            let qi = q.conjugate();
+            if f > 0 {
+                let prev = &data[(f - 1) * Self::DIMS..f * Self::DIMS];
+                let d = qi.rotate([prev[1] as f64, 0.0, prev[2] as f64]);
+                pos[0] += d[0];
+                pos[2] += d[2];
+            }
+            pos[1] = row[3] as f64;
+            out.extend(pos.map(|v| v as f32));
+            for k in 0..JOINTS - 1 {
+                let c = &row[4 + k * 3..7 + k * 3];
+                let w = qi.rotate([c[0] as f64, c[1] as f64, c[2] as f64]);
+                out.extend([(w[0] + pos[0]) as f32, w[1] as f32, (w[2] + pos[2]) as f32]);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Decodes to an SMPL motion at `fps`: root position from [`HumanMl263::decode_joints`], root
+    /// rotation solved from the decoded pelvis, hip and belly joints (exact for SMPL-offset
+    /// data), joints 1–21 from the 6D, hands 22, 23 identity.
+    pub fn decode(data: &[f32], fps: f32) -> Result<SmplMotion, ReprError> {
+        let joints = Self::decode_joints(data)?;
+        let t = joints.len() / (JOINTS * 3);
+        let off = SMPL24_OFFSETS;
+        let rest = frame_basis(sub(off[1], off[2]), off[3]);
+        let mut poses = Vec::with_capacity(t * POSE_DIMS);
+        let mut trans = Vec::with_capacity(t * 3);
+        for f in 0..t {
+            let j = |k: usize| {
+                let o = (f * JOINTS + k) * 3;
+                [joints[o], joints[o + 1], joints[o + 2]].map(f64::from)
+            };
+            let posed = frame_basis(sub(j(1), j(2)), sub(j(3), j(0)));
+            let root = posed.mul(&rest.transpose());
+            trans.extend(j(0).map(|v| v as f32));
+            poses.extend(root.to_axis_angle().map(|v| v as f32));
+            let row = &data[f * Self::DIMS..(f + 1) * Self::DIMS];
+            for d in row[67..193].chunks_exact(6) {
+                let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
+                poses.extend(
+                    Mat3::from_6d(&d)
+                        .transpose()
+                        .to_axis_angle()
+                        .map(|v| v as f32),
+                );
+            }
+            poses.extend([0.0; 6]);
+        }
+        SmplMotion::new(fps, poses, trans)
+    }
+}
+
+/// Orthonormal basis (as matrix columns) from two non-parallel vectors, Gram-Schmidt.
+fn frame_basis(a: V3, b: V3) -> Mat3 {
+    let e1 = normalize(a);
+    let d = e1[0] * b[0] + e1[1] * b[1] + e1[2] * b[2];
+    let e2 = normalize([b[0] - d * e1[0], b[1] - d * e1[1], b[2] - d * e1[2]]);
+    let e3 = cross(e1, e2);
+    Mat3([e1, e2, e3]).transpose()
+}
