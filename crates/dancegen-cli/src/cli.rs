@@ -23,6 +23,45 @@ pub enum Command {
     Features(FeaturesArgs),
     /// Tempo and beat times of a song, optionally plotted.
     Beats(BeatsArgs),
+    /// Convert motion between research formats and the formats animators use.
+    Convert(ConvertArgs),
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NpzStyleArg {
+    /// AMASS-style SMPL: poses, trans, betas, mocap_framerate.
+    Amass,
+    /// EDGE's keys: smpl_poses, smpl_trans.
+    Edge,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TargetSkeleton {
+    /// The 24-joint SMPL body (retargets a BVH by joint names).
+    Smpl24,
+}
+
+#[derive(Args, Debug)]
+pub struct ConvertArgs {
+    /// Input motion: AIST++ / AIOZ-GDance .pkl, .bvh, SMPL or EDGE .npz, FineDance .npy (T, 315)
+    /// or joints .npy (T, J, 3).
+    pub input: PathBuf,
+    /// Output; the format follows the extension: .npy (world joints (T, J, 3), float32, Y-up),
+    /// .bvh, .glb, .npz, .json.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output frame rate (default: the input's).
+    #[arg(long)]
+    pub fps: Option<f32>,
+    /// Retarget to this skeleton first.
+    #[arg(long, value_enum)]
+    pub to: Option<TargetSkeleton>,
+    /// Dancer of a group file to export to single-person formats (0-based).
+    #[arg(long)]
+    pub dancer: Option<usize>,
+    /// Keys of an .npz output.
+    #[arg(long, value_enum, default_value_t = NpzStyleArg::Amass)]
+    pub npz_style: NpzStyleArg,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,6 +2,7 @@
 
 mod cli;
 mod cmd_beats;
+mod cmd_convert;
 mod cmd_features;
 mod demo;
 mod plot;
@@ -21,6 +22,7 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         cli::Command::Features(args) => cmd_features::run(args, cli.quiet),
         cli::Command::Beats(args) => cmd_beats::run(args, cli.quiet),
+        cli::Command::Convert(args) => cmd_convert::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

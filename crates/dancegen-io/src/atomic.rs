@@ -34,6 +34,15 @@ pub fn write_atomic(
         .suffix(".part")
         .tempfile_in(dir)
         .map_err(|e| err(e.to_string()))?;
+    // Temporary files are created private (0600); an output file should get the permissions a
+    // plain `File::create` would give (rw-r--r-- under the usual umask).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| err(e.to_string()))?;
+    }
     {
         let mut w = BufWriter::new(tmp.as_file());
         fill(&mut w).map_err(|e| err(e.to_string()))?;
@@ -69,6 +78,17 @@ mod tests {
         write_atomic(&p, |w| w.write_all(b"one")).unwrap();
         write_atomic(&p, |w| w.write_all(b"two")).unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn outputs_are_world_readable() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("out.txt");
+        write_atomic(&p, |w| w.write_all(b"x")).unwrap();
+        let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o644);
     }
 
     #[test]

@@ -6,6 +6,8 @@
 
 pub mod atomic;
 pub mod npy;
+pub mod npz;
 
 pub use atomic::write_atomic;
-pub use npy::{NpyArray, read_npy, write_npy_f32};
+pub use npy::{NpyArray, NpyData, parse_npy, read_npy, write_npy_f32};
+pub use npz::{read_npz, read_npz_members, write_npz};

@@ -22,15 +22,84 @@ pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<(), W
 
 /// Writes an `.npy` float32 stream to any writer.
 pub fn write_npy_f32_to(w: &mut dyn Write, shape: &[usize], data: &[f32]) -> std::io::Result<()> {
+    write_npy_to(w, shape, data)
+}
+
+/// Writes an `.npy` stream of any npyz-serialisable element type (`<f4`, `<f8`, `<i8`, …).
+fn write_npy_to<T: npyz::Serialize + npyz::AutoSerialize + Copy>(
+    w: &mut dyn Write,
+    shape: &[usize],
+    data: &[T],
+) -> std::io::Result<()> {
     let shape_u64: Vec<u64> = shape.iter().map(|&s| s as u64).collect();
     use npyz::WriterBuilder;
-    let mut npy = npyz::WriteOptions::<f32>::new()
+    let mut npy = npyz::WriteOptions::<T>::new()
         .default_dtype()
         .shape(&shape_u64)
         .writer(w)
         .begin_nd()?;
     npy.extend(data.iter().copied())?;
     npy.finish()
+}
+
+/// Borrowed numeric data for a written array: the element type decides the numpy dtype.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NpyData<'a> {
+    /// `<f4`
+    F32(&'a [f32]),
+    /// `<f8`
+    F64(&'a [f64]),
+    /// `<i8`
+    I64(&'a [i64]),
+}
+
+impl NpyData<'_> {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        match self {
+            NpyData::F32(d) => d.len(),
+            NpyData::F64(d) => d.len(),
+            NpyData::I64(d) => d.len(),
+        }
+    }
+
+    /// Whether there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The numpy dtype string this data is written as.
+    pub fn dtype(&self) -> &'static str {
+        match self {
+            NpyData::F32(_) => "<f4",
+            NpyData::F64(_) => "<f8",
+            NpyData::I64(_) => "<i8",
+        }
+    }
+}
+
+/// Writes `data` of `shape` (C order) as an `.npy` stream; a shape whose product differs from
+/// the number of values is an `InvalidInput` error. `shape = []` writes a 0-d (scalar) array.
+pub fn write_npy_data_to(
+    w: &mut dyn Write,
+    shape: &[usize],
+    data: NpyData<'_>,
+) -> std::io::Result<()> {
+    let n: usize = shape.iter().product();
+    if n != data.len() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "shape {shape:?} holds {n} values but {} were given",
+                data.len()
+            ),
+        ));
+    }
+    match data {
+        NpyData::F32(d) => write_npy_to(w, shape, d),
+        NpyData::F64(d) => write_npy_to(w, shape, d),
+        NpyData::I64(d) => write_npy_to(w, shape, d),
+    }
 }
 
 /// A numpy array read as f64 values, whatever its numeric dtype.
@@ -57,17 +126,23 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
         reason,
     };
     let bytes = std::fs::read(path).map_err(|e| err(e.to_string()))?;
-    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| err(format!("not a .npy file: {e}")))?;
+    parse_npy(&bytes).map_err(err)
+}
+
+/// Parses the bytes of a numeric `.npy` stream (float32/64, int8-64, uint8-64, bool) into f64,
+/// C order. The error is a reason without a file name; callers add where the bytes came from.
+pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
     let fortran = npy.order() == npyz::Order::Fortran;
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
     let dtype = match npy.dtype() {
         npyz::DType::Plain(t) => t.to_string(),
-        other => return Err(err(format!("unsupported dtype {other:?}"))),
+        other => return Err(format!("unsupported dtype {other:?}")),
     };
     macro_rules! conv {
         ($t:ty) => {
             npy.into_vec::<$t>()
-                .map_err(|e| err(e.to_string()))?
+                .map_err(|e| e.to_string())?
                 .into_iter()
                 .map(|v| v as f64)
                 .collect()
@@ -86,11 +161,11 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
         "|u1" => conv!(u8),
         "|b1" => npy
             .into_vec::<bool>()
-            .map_err(|e| err(e.to_string()))?
+            .map_err(|e| e.to_string())?
             .into_iter()
             .map(|v| v as u8 as f64)
             .collect(),
-        d => return Err(err(format!("unsupported dtype {d}"))),
+        d => return Err(format!("unsupported dtype {d}")),
     };
     // np.save keeps Fortran order for F-contiguous arrays (e.g. a concatenation of
     // transposes); we always hand out C order.

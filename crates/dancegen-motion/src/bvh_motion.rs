@@ -64,6 +64,8 @@ pub enum BvhMotionError {
     },
     #[error("cannot infer the BVH length unit: mean bone length ratio to SMPL is {0}")]
     Units(f64),
+    #[error("BVH hierarchy is not a valid skeleton: {0}")]
+    Skeleton(#[from] crate::skeleton::SkeletonError),
 }
 
 /// Per-frame world transforms of a BVH: rotations and positions for every joint.
@@ -463,6 +465,37 @@ pub fn smpl_fk_f64(poses: &[f32], trans: &[f32]) -> Result<Vec<f64>, BvhMotionEr
     let p: Vec<f64> = poses.iter().map(|&v| f64::from(v)).collect();
     let t: Vec<f64> = trans.iter().map(|&v| f64::from(v)).collect();
     Ok(fk_axis_angle_f64(&Skeleton::smpl24(), &p, &t)?)
+}
+
+/// Any BVH as a [`Skeleton`] plus axis-angle local rotations (`T × 3J`) and root translation
+/// (`T × 3`), all lengths multiplied by `scale` — the form the glTF exporter takes.
+///
+/// End sites are dropped and position channels of non-root joints are ignored (a skeleton has
+/// fixed bone lengths); the root translation is the root's offset plus its position channels.
+pub fn bvh_skeleton_motion(
+    bvh: &Bvh,
+    scale: f64,
+) -> Result<(Skeleton, Vec<f32>, Vec<f32>), BvhMotionError> {
+    bvh.validate()?;
+    let names: Vec<String> = bvh.joints.iter().map(|j| j.name.clone()).collect();
+    let parents: Vec<Option<usize>> = bvh.joints.iter().map(|j| j.parent).collect();
+    let offsets: Vec<[f64; 3]> = bvh.joints.iter().map(|j| scaled(j.offset, scale)).collect();
+    let skel = Skeleton::new(names, parents, offsets)?;
+    let starts = channel_starts(bvh);
+    let nc = bvh.num_channels();
+    let nj = bvh.joints.len();
+    let mut poses = Vec::with_capacity(bvh.frames * nj * 3);
+    let mut trans = Vec::with_capacity(bvh.frames * 3);
+    for f in 0..bvh.frames {
+        let row = &bvh.data[f * nc..(f + 1) * nc];
+        for (j, &start) in starts.iter().enumerate() {
+            let aa = local_rotation(bvh, j, row, start).to_axis_angle();
+            poses.extend(aa.iter().map(|&v| v as f32));
+        }
+        let root = scaled(local_translation(bvh, 0, row, starts[0]), scale);
+        trans.extend(root.iter().map(|&v| v as f32));
+    }
+    Ok((skel, poses, trans))
 }
 
 #[cfg(test)]

@@ -9,12 +9,14 @@ pub mod bvh;
 pub mod bvh_motion;
 pub mod conventions;
 pub mod fk;
+pub mod formats;
 pub mod gltf;
 pub mod pickle;
 pub mod repr;
 pub mod retarget;
 pub mod rotation;
 pub mod skeleton;
+pub mod smpl_npz;
 
 pub use fk::{FkError, FkOutput, LocalRotations, forward_kinematics};
 pub use rotation::{Mat3, Quat};

@@ -1,0 +1,39 @@
+//! `dancegen convert`: motion from any supported format to any other.
+
+use std::io::Write;
+
+use anyhow::Result;
+use dancegen_motion::formats::{
+    ConvertOptions, NpzStyle, convert_motion, load_motion_file, save_motion_file,
+};
+
+use crate::cli::{ConvertArgs, NpzStyleArg, TargetSkeleton};
+use crate::progress::spinner;
+
+pub fn run(args: &ConvertArgs, quiet: bool) -> Result<()> {
+    let opts = ConvertOptions {
+        fps: args.fps,
+        to_smpl24: args.to == Some(TargetSkeleton::Smpl24),
+        dancer: args.dancer,
+        npz_style: match args.npz_style {
+            NpzStyleArg::Amass => NpzStyle::Amass,
+            NpzStyleArg::Edge => NpzStyle::Edge,
+        },
+    };
+    let pb = spinner(&format!("converting {}", args.input.display()), quiet);
+    let loaded = load_motion_file(&args.input)?;
+    let converted = convert_motion(&args.input, loaded, &opts)?;
+    save_motion_file(&args.output, &converted, &opts)?;
+    pb.finish_and_clear();
+    if !quiet {
+        writeln!(
+            std::io::stdout().lock(),
+            "{} ({}, {} fps) -> {}",
+            args.input.display(),
+            converted.kind(),
+            converted.fps(),
+            args.output.display()
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,170 @@
+//! The `convert` command contract: `.npy` output = world joints (T, J, 3), metres, Y-up for SMPL
+//! inputs; the BVH's own joints in its units without `--to`; retargeted SMPL 24 with it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn dancegen(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dancegen"))
+        .args(args)
+        .output()
+        .expect("run dancegen")
+}
+
+fn shared() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+const AIST: &str = "data/aistpp/motions/gBR_sBM_cAll_d04_mBR2_ch08.pkl";
+
+#[test]
+fn aistpp_to_npy_is_metres_y_up_with_pelvis_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("j.npy");
+    let src = shared().join(AIST);
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    let a = dancegen_io::read_npy(&out).unwrap();
+    assert_eq!(a.shape, vec![576, 24, 3]);
+    assert_eq!(a.dtype, "<f4");
+    // Pelvis = smpl_trans / smpl_scaling + rest pelvis (shared/data/README.md).
+    let m = dancegen_motion::aistpp::load_motion(&src).unwrap();
+    let rest = [-0.0021f64, -0.2444, 0.0282];
+    for f in [0usize, 300, 575] {
+        for (ax, r) in rest.iter().enumerate() {
+            let want = m.trans[f * 3 + ax] as f64 / m.scaling as f64 + r;
+            let got = a.data[f * 72 + ax];
+            assert!(
+                (got - want).abs() < 1e-4,
+                "frame {f} axis {ax}: {got} vs {want}"
+            );
+        }
+    }
+    // Rotations and offsets are checked against the AIST++ keypoints in
+    // dancegen-motion/tests/aistpp_fk.rs; here the contract's translation convention.
+    // --fps 30 halves the frames (stride as the references do).
+    let out30 = dir.path().join("j30.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        src.to_str().unwrap(),
+        "--fps",
+        "30",
+        "-o",
+        out30.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        dancegen_io::read_npy(&out30).unwrap().shape,
+        vec![288, 24, 3]
+    );
+}
+
+#[test]
+fn bvh_to_npy_keeps_file_joints_and_units_or_retargets() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = shared().join("data/cmu-salsa/60_01_scaled.bvh");
+    let raw = dir.path().join("raw.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        raw.to_str().unwrap(),
+    ]));
+    let bvh = dancegen_motion::bvh::read_bvh(&src, &Default::default()).unwrap();
+    let a = dancegen_io::read_npy(&raw).unwrap();
+    assert_eq!(a.shape, vec![bvh.frames, bvh.joints.len(), 3]);
+    let smpl = dir.path().join("smpl.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        src.to_str().unwrap(),
+        "--to",
+        "smpl24",
+        "--fps",
+        "30",
+        "-o",
+        smpl.to_str().unwrap(),
+    ]));
+    let s = dancegen_io::read_npy(&smpl).unwrap();
+    assert_eq!(s.shape[1..], [24, 3]);
+    assert_eq!(s.shape[0], bvh.frames.div_ceil(4));
+}
+
+#[test]
+fn every_output_format_writes_and_reads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = shared().join(AIST);
+    for ext in ["bvh", "glb", "npz", "json"] {
+        let out = dir.path().join(format!("m.{ext}"));
+        ok(&dancegen(&[
+            "-q",
+            "convert",
+            src.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]));
+        assert!(std::fs::metadata(&out).unwrap().len() > 1000, "{ext}");
+    }
+    // BVH and NPZ come back to the same joints.
+    let direct = dir.path().join("direct.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        src.to_str().unwrap(),
+        "-o",
+        direct.to_str().unwrap(),
+    ]));
+    let want = dancegen_io::read_npy(&direct).unwrap().data;
+    let back = dir.path().join("back.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        dir.path().join("m.npz").to_str().unwrap(),
+        "-o",
+        back.to_str().unwrap(),
+    ]));
+    let got = dancegen_io::read_npy(&back).unwrap().data;
+    let err = got
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-5, "npz round trip {err}");
+}
+
+#[test]
+fn bad_motion_inputs_fail_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.npy");
+    let bad = dir.path().join("broken.bvh");
+    std::fs::write(&bad, "HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Zposition\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n0 0 0\n").unwrap();
+    let o = dancegen(&[
+        "convert",
+        bad.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("broken.bvh") && !e.contains("panicked"), "{e}");
+    assert!(!out.exists());
+    let o = dancegen(&["convert", "/nonexistent/m.pkl", "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = dancegen(&[
+        "convert",
+        shared().join(AIST).to_str().unwrap(),
+        "-o",
+        dir.path().join("x.fbx").to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown output format"));
+}

@@ -1,0 +1,426 @@
+//! One entry point per direction for every motion file format the project reads and writes,
+//! chosen by file extension. Importers convert to the canonical conventions
+//! ([`crate::conventions`]) here and nowhere else; exporters convert back at the edge.
+//!
+//! | extension | read | write |
+//! |---|---|---|
+//! | `.pkl` | AIST++ motion (`smpl_poses`, `smpl_trans`, `smpl_scaling`), AIOZ-GDance group | – |
+//! | `.bvh` | any skeleton | SMPL 24 (centimetres) or the file's own skeleton |
+//! | `.npz` | AMASS-style SMPL (`poses`, `trans`, `mocap_framerate`), EDGE-style (`smpl_poses`, `smpl_trans`) | both |
+//! | `.npy` | FineDance `(T, 315)`, joints `(T, J, 3)` | world joints `(T, J, 3)` float32 |
+//! | `.glb` | – | animated skeleton + skinned capsule mesh |
+//! | `.json` | – | joints, skeleton and (for SMPL) poses |
+
+use std::path::{Path, PathBuf};
+
+use crate::aistpp;
+use crate::bvh::{self, Bvh, BvhReadOptions, BvhWriteOptions};
+use crate::bvh_motion::{self, bvh_world_positions};
+use crate::gltf::{self, GlbOptions};
+use crate::repr::finedance::FineDanceMotion;
+use crate::repr::group::GroupMotion;
+use crate::repr::motion::SmplMotion;
+use crate::retarget;
+use crate::skeleton::Skeleton;
+use crate::smpl_npz::SmplNpzOptions;
+
+/// A motion file that could not be read, converted or written.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {reason}")]
+pub struct FormatError {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+fn err(path: &Path, reason: impl std::fmt::Display) -> FormatError {
+    FormatError {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+/// A motion as read from a file, before any conversion the user asked for.
+#[derive(Debug, Clone)]
+pub enum LoadedMotion {
+    /// SMPL 24 local rotations + pelvis trajectory (AIST++, SMPL/EDGE npz, FineDance).
+    Smpl(SmplMotion),
+    /// Several dancers of one group recording (AIOZ-GDance).
+    Group(Vec<SmplMotion>),
+    /// A BVH with its own skeleton, in the file's units.
+    Bvh(Bvh),
+    /// World joint positions only, `(T, J, 3)`.
+    Joints {
+        fps: f32,
+        joints: usize,
+        positions: Vec<f32>,
+    },
+}
+
+impl LoadedMotion {
+    pub fn fps(&self) -> f32 {
+        match self {
+            LoadedMotion::Smpl(m) => m.fps,
+            LoadedMotion::Group(g) => g.first().map_or(0.0, |m| m.fps),
+            LoadedMotion::Bvh(b) => b.nominal_fps() as f32,
+            LoadedMotion::Joints { fps, .. } => *fps,
+        }
+    }
+
+    pub fn kind(&self) -> &'static str {
+        match self {
+            LoadedMotion::Smpl(_) => "SMPL 24 motion",
+            LoadedMotion::Group(_) => "group motion",
+            LoadedMotion::Bvh(_) => "BVH motion",
+            LoadedMotion::Joints { .. } => "joint positions",
+        }
+    }
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Frame rate assumed for `.npy` inputs, which do not store one (FineDance is 30 fps).
+pub const NPY_DEFAULT_FPS: f32 = 30.0;
+
+/// Reads any supported motion file (see the module table).
+pub fn load_motion_file(path: &Path) -> Result<LoadedMotion, FormatError> {
+    if !path.exists() {
+        return Err(err(path, "no such file"));
+    }
+    match extension(path).as_str() {
+        "pkl" => load_pickle(path),
+        "bvh" => bvh::read_bvh(path, &BvhReadOptions::default())
+            .map(LoadedMotion::Bvh)
+            .map_err(|e| err(path, e)),
+        "npz" => crate::smpl_npz::read_smpl_npz(path, &SmplNpzOptions::default())
+            .map(|n| LoadedMotion::Smpl(n.motion))
+            .map_err(|e| err(path, e)),
+        "npy" => load_npy(path),
+        other => Err(err(
+            path,
+            format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz or .npy)"),
+        )),
+    }
+}
+
+fn load_pickle(path: &Path) -> Result<LoadedMotion, FormatError> {
+    // AIST++ motion first; a group file has `root_trans` instead of `smpl_trans`.
+    match aistpp::load_motion(path) {
+        Ok(m) => Ok(LoadedMotion::Smpl(SmplMotion::from_aistpp(&m))),
+        Err(first) => match aistpp::load_gdance(path) {
+            Ok(g) => {
+                let group = GroupMotion::from_gdance(&g).map_err(|e| err(path, e))?;
+                Ok(LoadedMotion::Group(group.dancers))
+            }
+            Err(_) => Err(err(
+                path,
+                format!("not an AIST++ or AIOZ-GDance motion pickle: {first}"),
+            )),
+        },
+    }
+}
+
+fn load_npy(path: &Path) -> Result<LoadedMotion, FormatError> {
+    let a = dancegen_io::read_npy(path).map_err(|e| err(path, e))?;
+    match a.shape.as_slice() {
+        [_, 315] => FineDanceMotion::from_npy(path)
+            .and_then(|m| m.to_smpl24())
+            .map(LoadedMotion::Smpl)
+            .map_err(|e| err(path, e)),
+        [t, j, 3] if *t > 0 && *j > 0 => {
+            let positions: Vec<f32> = a.data.iter().map(|&v| v as f32).collect();
+            if positions.iter().any(|v| !v.is_finite()) {
+                return Err(err(path, "joint positions contain NaN or infinity"));
+            }
+            Ok(LoadedMotion::Joints {
+                fps: NPY_DEFAULT_FPS,
+                joints: *j,
+                positions,
+            })
+        }
+        shape => Err(err(
+            path,
+            format!("array of shape {shape:?} is neither FineDance (T, 315) nor joints (T, J, 3)"),
+        )),
+    }
+}
+
+/// Options of [`convert_motion`].
+#[derive(Clone, Debug, Default)]
+pub struct ConvertOptions {
+    /// Target frame rate (`None` keeps the input's).
+    pub fps: Option<f32>,
+    /// Retarget a BVH to SMPL 24.
+    pub to_smpl24: bool,
+    /// Which dancer of a group file to export to single-person formats.
+    pub dancer: Option<usize>,
+    /// Style of `.npz` output.
+    pub npz_style: NpzStyle,
+}
+
+/// `.npz` output flavour.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NpzStyle {
+    /// AMASS-style SMPL: `poses`, `trans` (SMPL `transl`), `betas`, `mocap_framerate`.
+    #[default]
+    Amass,
+    /// EDGE's output keys: `smpl_poses`, `smpl_trans`.
+    Edge,
+}
+
+/// Applies `--to smpl24`, `--dancer` and `--fps` to a loaded motion.
+pub fn convert_motion(
+    path: &Path,
+    m: LoadedMotion,
+    opts: &ConvertOptions,
+) -> Result<LoadedMotion, FormatError> {
+    let m = match (m, opts.to_smpl24) {
+        (LoadedMotion::Bvh(b), true) => {
+            // Keep the source rate unless asked otherwise; retargeting then subsamples.
+            let target = opts.fps.map_or(b.nominal_fps(), f64::from);
+            let out = retarget::retarget_poser_to_smpl(&b, target).map_err(|e| err(path, e))?;
+            let report = retarget::retarget_report(&b, &out).map_err(|e| err(path, e))?;
+            tracing::info!("{}: retargeted to SMPL 24: {report}", path.display());
+            let motion =
+                SmplMotion::new(out.fps as f32, out.poses, out.trans).map_err(|e| err(path, e))?;
+            LoadedMotion::Smpl(motion)
+        }
+        (LoadedMotion::Joints { .. }, true) => {
+            return Err(err(
+                path,
+                "joint positions cannot be retargeted (no rotations)",
+            ));
+        }
+        (m, _) => m,
+    };
+    let m = match (m, opts.dancer) {
+        (LoadedMotion::Group(g), Some(d)) => {
+            let n = g.len();
+            LoadedMotion::Smpl(
+                g.into_iter()
+                    .nth(d)
+                    .ok_or_else(|| err(path, format!("--dancer {d}: the file has {n} dancers")))?,
+            )
+        }
+        (m, _) => m,
+    };
+    let Some(fps) = opts.fps else {
+        return Ok(m);
+    };
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(err(path, format!("invalid target frame rate {fps}")));
+    }
+    Ok(match m {
+        LoadedMotion::Smpl(s) => LoadedMotion::Smpl(s.resample_fps(fps)),
+        LoadedMotion::Group(g) => {
+            LoadedMotion::Group(g.into_iter().map(|s| s.resample_fps(fps)).collect())
+        }
+        LoadedMotion::Bvh(b) => LoadedMotion::Bvh(bvh_stride(path, b, fps)?),
+        LoadedMotion::Joints {
+            fps: src,
+            joints,
+            positions,
+        } => LoadedMotion::Joints {
+            fps,
+            joints,
+            positions: resample_linear(&positions, joints * 3, src, fps),
+        },
+    })
+}
+
+/// Changes a raw BVH's frame rate by keeping every k-th frame (integer ratios only; Euler
+/// channels cannot be interpolated safely — retarget with `--to smpl24` for other rates).
+fn bvh_stride(path: &Path, mut b: Bvh, fps: f32) -> Result<Bvh, FormatError> {
+    let ratio = b.nominal_fps() / fps as f64;
+    let k = ratio.round();
+    if k < 1.0 || (ratio - k).abs() > 1e-6 {
+        return Err(err(
+            path,
+            format!(
+                "a raw BVH can only be resampled by an integer factor ({:.3} fps -> {fps} fps); \
+                 use --to smpl24 for other rates",
+                b.nominal_fps()
+            ),
+        ));
+    }
+    let k = k as usize;
+    let nc = b.num_channels();
+    let frames: Vec<usize> = (0..b.frames).step_by(k).collect();
+    let mut data = Vec::with_capacity(frames.len() * nc);
+    for &f in &frames {
+        data.extend_from_slice(&b.data[f * nc..(f + 1) * nc]);
+    }
+    b.data = data;
+    b.frames = frames.len();
+    b.frame_time *= k as f64;
+    Ok(b)
+}
+
+/// Linear interpolation of per-frame vectors of `width` values from `src` to `dst` fps.
+fn resample_linear(x: &[f32], width: usize, src: f32, dst: f32) -> Vec<f32> {
+    let n = x.len() / width;
+    if n == 0 {
+        return Vec::new();
+    }
+    let duration = (n - 1) as f64 / src as f64;
+    let m = (duration * dst as f64).floor() as usize + 1;
+    let mut out = Vec::with_capacity(m * width);
+    for i in 0..m {
+        let t = i as f64 * src as f64 / dst as f64;
+        let a = (t.floor() as usize).min(n - 1);
+        let b = (a + 1).min(n - 1);
+        let w = (t - a as f64) as f32;
+        for c in 0..width {
+            out.push(x[a * width + c] * (1.0 - w) + x[b * width + c] * w);
+        }
+    }
+    out
+}
+
+fn single<'a>(path: &Path, m: &'a LoadedMotion) -> Result<&'a SmplMotion, FormatError> {
+    match m {
+        LoadedMotion::Smpl(s) => Ok(s),
+        LoadedMotion::Group(g) => Err(err(
+            path,
+            format!(
+                "the input has {} dancers; choose one with --dancer N (0-based)",
+                g.len()
+            ),
+        )),
+        other => Err(err(
+            path,
+            format!("a {} cannot be written as SMPL data", other.kind()),
+        )),
+    }
+}
+
+/// World joint positions `(T, J, 3)` of a motion (metres for SMPL, file units for raw BVH).
+pub fn joint_positions(
+    path: &Path,
+    m: &LoadedMotion,
+) -> Result<(Vec<usize>, Vec<f32>), FormatError> {
+    match m {
+        LoadedMotion::Smpl(s) => {
+            let p = s.joints_world().map_err(|e| err(path, e))?;
+            Ok((vec![s.frames(), 24, 3], p))
+        }
+        LoadedMotion::Group(g) => {
+            let mut all = Vec::new();
+            let t = g.first().map_or(0, |s| s.frames());
+            for s in g {
+                all.extend(s.joints_world().map_err(|e| err(path, e))?);
+            }
+            Ok((vec![g.len(), t, 24, 3], all))
+        }
+        LoadedMotion::Bvh(b) => {
+            let (t, j, p) = bvh_world_positions(b, 1.0).map_err(|e| err(path, e))?;
+            Ok((vec![t, j, 3], p.into_iter().map(|v| v as f32).collect()))
+        }
+        LoadedMotion::Joints {
+            joints, positions, ..
+        } => Ok((
+            vec![positions.len() / (joints * 3), *joints, 3],
+            positions.clone(),
+        )),
+    }
+}
+
+/// Writes a motion in the format given by `out`'s extension.
+pub fn save_motion_file(
+    out: &Path,
+    m: &LoadedMotion,
+    opts: &ConvertOptions,
+) -> Result<(), FormatError> {
+    match extension(out).as_str() {
+        "npy" => {
+            let (shape, data) = joint_positions(out, m)?;
+            dancegen_io::write_npy_f32(out, &shape, &data).map_err(|e| err(out, e))
+        }
+        "bvh" => {
+            let b = match m {
+                LoadedMotion::Bvh(b) => b.clone(),
+                other => {
+                    let s = single(out, other)?;
+                    bvh_motion::smpl_to_bvh(&s.poses, &s.trans, s.fps as f64)
+                        .map_err(|e| err(out, e))?
+                }
+            };
+            bvh::write_bvh_file(out, &b, &BvhWriteOptions::default()).map_err(|e| err(out, e))
+        }
+        "glb" => {
+            let (skel, poses, trans, fps) = match m {
+                LoadedMotion::Bvh(b) => {
+                    let (skel, poses, trans) =
+                        bvh_motion::bvh_skeleton_motion(b, 1.0).map_err(|e| err(out, e))?;
+                    (skel, poses, trans, b.nominal_fps() as f32)
+                }
+                other => {
+                    let s = single(out, other)?;
+                    (Skeleton::smpl24(), s.poses.clone(), s.trans.clone(), s.fps)
+                }
+            };
+            gltf::write_glb(out, &skel, &poses, &trans, fps, &GlbOptions::default())
+                .map_err(|e| err(out, e))
+        }
+        "npz" => {
+            let s = single(out, m)?;
+            let r = match opts.npz_style {
+                NpzStyle::Amass => {
+                    crate::smpl_npz::write_smpl_npz(out, s, &SmplNpzOptions::default())
+                }
+                NpzStyle::Edge => {
+                    crate::smpl_npz::write_edge_npz(out, s, &SmplNpzOptions::default())
+                }
+            };
+            r.map_err(|e| err(out, e))
+        }
+        "json" => write_json(out, m),
+        other => Err(err(
+            out,
+            format!("unknown output format '.{other}' (use .npy, .bvh, .glb, .npz or .json)"),
+        )),
+    }
+}
+
+fn write_json(out: &Path, m: &LoadedMotion) -> Result<(), FormatError> {
+    let (shape, positions) = joint_positions(out, m)?;
+    let (names, parents): (Vec<String>, Vec<Option<usize>>) = match m {
+        LoadedMotion::Bvh(b) => (
+            b.joints.iter().map(|j| j.name.clone()).collect(),
+            b.joints.iter().map(|j| j.parent).collect(),
+        ),
+        LoadedMotion::Joints { joints, .. } => (
+            (0..*joints).map(|j| format!("joint{j}")).collect(),
+            vec![None; *joints],
+        ),
+        _ => {
+            let s = Skeleton::smpl24();
+            (s.names().to_vec(), s.parents().to_vec())
+        }
+    };
+    let units = match m {
+        LoadedMotion::Bvh(_) => "file units",
+        _ => "metres",
+    };
+    let mut v = serde_json::json!({
+        "fps": m.fps(),
+        "up": "y",
+        "units": units,
+        "joint_names": names,
+        "parents": parents,
+        "shape": shape,
+        "positions": positions,
+    });
+    if let LoadedMotion::Smpl(s) = m {
+        v["smpl_poses_axis_angle"] = serde_json::json!(s.poses);
+        v["pelvis_trans"] = serde_json::json!(s.trans);
+    }
+    dancegen_io::write_atomic(out, |w| {
+        serde_json::to_writer(&mut *w, &v).map_err(std::io::Error::other)
+    })
+    .map_err(|e| err(out, e))
+}
