@@ -25,6 +25,8 @@ pub enum Command {
     Beats(BeatsArgs),
     /// Convert motion between research formats and the formats animators use.
     Convert(ConvertArgs),
+    /// Render a preview of one or more dancers: PNG (one frame), GIF or MP4 (with audio).
+    Render(RenderArgs),
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +64,35 @@ pub struct ConvertArgs {
     /// Keys of an .npz output.
     #[arg(long, value_enum, default_value_t = NpzStyleArg::Amass)]
     pub npz_style: NpzStyleArg,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Motion files (any format `convert` reads); each dancer of a group file is drawn too,
+    /// one colour per dancer.
+    #[arg(required = true)]
+    pub motions: Vec<PathBuf>,
+    /// Output: .png (one frame), .gif or .mp4 (needs ffmpeg on PATH).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Song to mux into an .mp4 (the video is cut to the shorter of the two).
+    #[arg(long)]
+    pub audio: Option<PathBuf>,
+    /// Output frame rate (default: the motion's; at most 15 for .gif unless given).
+    #[arg(long)]
+    pub fps: Option<f32>,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 480)]
+    pub height: u32,
+    /// .png: the frame to draw, counted at the output frame rate (default: the middle one).
+    #[arg(long)]
+    pub frame: Option<usize>,
+    /// No anti-aliasing and no shadows (several times faster).
+    #[arg(long)]
+    pub draft: bool,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

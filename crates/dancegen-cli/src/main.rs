@@ -4,6 +4,7 @@ mod cli;
 mod cmd_beats;
 mod cmd_convert;
 mod cmd_features;
+mod cmd_render;
 mod demo;
 mod plot;
 mod progress;
@@ -23,6 +24,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Features(args) => cmd_features::run(args, cli.quiet),
         cli::Command::Beats(args) => cmd_beats::run(args, cli.quiet),
         cli::Command::Convert(args) => cmd_convert::run(args, cli.quiet),
+        cli::Command::Render(args) => cmd_render::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

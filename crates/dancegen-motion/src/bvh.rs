@@ -670,11 +670,22 @@ fn open_joint(
             found: clip(t),
         });
     }
+    // Tokens are split on ASCII whitespace only; trim the Unicode whitespace (vertical tab,
+    // NBSP, ...) that can remain at the ends so every accepted name also writes back (found by
+    // the fuzz target, tests/fuzz_regressions.rs).
+    let name = rest.join(" ").trim().to_string();
+    if name.is_empty() {
+        return Err(BvhErrorKind::Unexpected {
+            line,
+            expected: "joint name",
+            found: String::new(),
+        });
+    }
     if !brace_on_line {
         lx.expect_keyword("{")?;
     }
     joints.push(BvhJoint {
-        name: rest.join(" "),
+        name,
         parent,
         offset: [0.0; 3],
         channels: Vec::new(),

@@ -1,0 +1,317 @@
+//! A small CPU renderer for motion previews: shaded capsule ("stick") figures, one colour per
+//! dancer, seen from one fixed camera over a floor grid with soft blob shadows.
+//!
+//! - **Scene** ([`Scene::new`]): the camera looks at the centre of the bounding box of all
+//!   dancers over the whole clip from the front diagonal (+Z front, +X side, slightly above,
+//!   Y-up, see `dancegen_motion::conventions`) and is pulled back until every joint of every
+//!   frame fits. The floor is the plane at the lowest joint height of the clip minus the
+//!   capsule radius, so feet rest on it. Units are whatever the motion uses (metres for SMPL,
+//!   file units for BVH); sizes (capsule radius, grid spacing) follow the figure's height.
+//! - **Figures**: a capsule around every parent→child bone; joints whose parents are unknown
+//!   (raw joint arrays) are drawn as spheres only. The topmost leaf joint (the head) gets a
+//!   larger sphere. Ray-cast per pixel inside each primitive's screen box, z-buffered, Lambert
+//!   shading plus a sky/ground ambient term; 2×2 supersampling by default.
+//! - **Output** ([`write`]): PNG (one frame), GIF (fixed 256-colour palette with ordered
+//!   dithering) and MP4 (through an `ffmpeg` subprocess), all written atomically.
+//!
+//! Frames are rendered in parallel with rayon ([`FrameStream`] renders batches of frames and
+//! yields them in order, so long clips never sit in memory at once).
+
+mod math;
+mod scene;
+pub mod write;
+
+pub use scene::{DancerTrack, RenderOptions, Scene};
+
+use std::path::Path;
+
+use dancegen_motion::formats::{LoadedMotion, joint_positions};
+use dancegen_motion::skeleton::Skeleton;
+
+/// Why a clip could not be rendered or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("nothing to render: {0}")]
+    Empty(String),
+    #[error("invalid input: {0}")]
+    Invalid(String),
+    #[error(
+        "ffmpeg was not found on PATH: install ffmpeg (e.g. `apt install ffmpeg`) to write MP4, or write a .gif instead"
+    )]
+    FfmpegMissing,
+    #[error("ffmpeg failed: {0}")]
+    Ffmpeg(String),
+    #[error(transparent)]
+    Write(#[from] dancegen_io::atomic::WriteError),
+    #[error(transparent)]
+    Motion(#[from] dancegen_motion::formats::FormatError),
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// An 8-bit RGB image, row-major, top row first.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    /// `width × height × 3` bytes.
+    pub data: Vec<u8>,
+}
+
+impl RgbImage {
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
+        let i = ((y * self.width + x) * 3) as usize;
+        [self.data[i], self.data[i + 1], self.data[i + 2]]
+    }
+}
+
+/// The dancers of a loaded motion file as render tracks (a group file gives several).
+///
+/// SMPL motions get the SMPL 24 parents, BVH its own hierarchy (in file units), raw joint
+/// arrays no parents (spheres only).
+pub fn tracks_from_motion(path: &Path, m: &LoadedMotion) -> Result<Vec<DancerTrack>, RenderError> {
+    let fps = m.fps();
+    let (shape, data) = joint_positions(path, m)?;
+    let tracks = match m {
+        LoadedMotion::Smpl(_) => vec![DancerTrack {
+            joints: data,
+            parents: Skeleton::smpl24().parents().to_vec(),
+            fps,
+        }],
+        LoadedMotion::Group(_) => {
+            let per = shape[1] * shape[2] * shape[3];
+            data.chunks(per.max(1))
+                .map(|c| DancerTrack {
+                    joints: c.to_vec(),
+                    parents: Skeleton::smpl24().parents().to_vec(),
+                    fps,
+                })
+                .collect()
+        }
+        LoadedMotion::Bvh(b) => vec![DancerTrack {
+            joints: data,
+            parents: b.joints.iter().map(|j| j.parent).collect(),
+            fps,
+        }],
+        LoadedMotion::Joints { joints, .. } => vec![DancerTrack {
+            joints: data,
+            parents: vec![None; *joints],
+            fps,
+        }],
+    };
+    Ok(tracks)
+}
+
+/// Renders the whole clip at `out_fps` into memory (convenient for short clips and tests; use
+/// [`Scene::stream`] for long ones).
+pub fn render_frames(
+    tracks: &[DancerTrack],
+    out_fps: f32,
+    width: u32,
+    height: u32,
+) -> Result<Vec<RgbImage>, RenderError> {
+    let scene = Scene::new(tracks, &RenderOptions::new(width, height))?;
+    Ok(scene.stream(out_fps).collect())
+}
+
+/// Frames of a clip rendered in parallel batches, yielded in order.
+pub struct FrameStream<'a> {
+    scene: &'a Scene,
+    times: Vec<f32>,
+    next: usize,
+    batch: std::vec::IntoIter<RgbImage>,
+}
+
+impl FrameStream<'_> {
+    /// Number of frames the stream yields in total.
+    pub fn total(&self) -> usize {
+        self.times.len()
+    }
+}
+
+impl Iterator for FrameStream<'_> {
+    type Item = RgbImage;
+
+    fn next(&mut self) -> Option<RgbImage> {
+        use rayon::prelude::*;
+        if let Some(img) = self.batch.next() {
+            return Some(img);
+        }
+        if self.next >= self.times.len() {
+            return None;
+        }
+        let n = (rayon::current_num_threads() * 2).clamp(2, 32);
+        let end = (self.next + n).min(self.times.len());
+        let imgs: Vec<RgbImage> = self.times[self.next..end]
+            .par_iter()
+            .map(|&t| self.scene.render_at(t))
+            .collect();
+        self.next = end;
+        self.batch = imgs.into_iter();
+        self.batch.next()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A SMPL 24 T-pose standing on y = 0, `frames` frames, shifted by `dx` along x and
+    /// swaying slowly.
+    fn tpose(frames: usize, dx: f32) -> DancerTrack {
+        let sk = Skeleton::smpl24();
+        let rest = sk.rest_positions();
+        let min_y = rest.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+        let mut joints = Vec::new();
+        for f in 0..frames {
+            let sway = (f as f32 * 0.1).sin() * 0.05;
+            for p in &rest {
+                joints.extend([p[0] as f32 + dx + sway, (p[1] - min_y) as f32, p[2] as f32]);
+            }
+        }
+        DancerTrack {
+            joints,
+            parents: sk.parents().to_vec(),
+            fps: 30.0,
+        }
+    }
+
+    fn is_figure(p: [u8; 3]) -> bool {
+        // Background and floor are near-grey; dancers are saturated.
+        let mx = p.iter().copied().max().unwrap() as i32;
+        let mn = p.iter().copied().min().unwrap() as i32;
+        mx - mn > 60
+    }
+
+    fn save(name: &str, img: &RgbImage) {
+        if let Some(dir) = std::env::var_os("DANCEGEN_RENDER_TEST_OUT") {
+            write::write_png(&std::path::Path::new(&dir).join(name), img).unwrap();
+        }
+    }
+
+    #[test]
+    fn tpose_is_drawn_in_the_centre_over_a_grid() {
+        let frames = render_frames(&[tpose(3, 0.0)], 30.0, 320, 240).unwrap();
+        assert_eq!(frames.len(), 3);
+        let img = &frames[1];
+        save("tpose.png", img);
+        // What the GIF palette makes of it.
+        let pal = write::gif_palette();
+        let q = write::quantize_gif(img);
+        let data = q
+            .iter()
+            .flat_map(|&i| pal[i as usize * 3..i as usize * 3 + 3].to_vec())
+            .collect();
+        save(
+            "tpose_gif.png",
+            &RgbImage {
+                width: 320,
+                height: 240,
+                data,
+            },
+        );
+        assert_eq!(img.data.len(), 320 * 240 * 3);
+        let (mut n, mut cx, mut cy) = (0usize, 0.0f64, 0.0f64);
+        let mut outside = 0usize;
+        for y in 0..240 {
+            for x in 0..320 {
+                if is_figure(img.pixel(x, y)) {
+                    n += 1;
+                    cx += x as f64;
+                    cy += y as f64;
+                    if !(40..280).contains(&x) || !(20..220).contains(&y) {
+                        outside += 1;
+                    }
+                }
+            }
+        }
+        assert!(n > 1500, "only {n} figure pixels");
+        assert_eq!(outside, 0);
+        let (cx, cy) = (cx / n as f64, cy / n as f64);
+        assert!(
+            (cx - 160.0).abs() < 50.0 && (cy - 120.0).abs() < 50.0,
+            "{cx} {cy}"
+        );
+        // The floor grid: along the bottom rows, grey pixels alternate between the floor
+        // colour and darker grid lines.
+        let row: Vec<u8> = (0..320).map(|x| img.pixel(x, 230)[0]).collect();
+        let dark = row.iter().filter(|&&v| v < 175).count();
+        let light = row.iter().filter(|&&v| v > 190).count();
+        assert!(dark > 5 && light > 100, "dark {dark} light {light}");
+        // Sky at the top.
+        let top = img.pixel(160, 2);
+        assert!(top[2] > top[0], "{top:?}");
+    }
+
+    #[test]
+    fn two_dancers_get_two_colours() {
+        let img = &render_frames(&[tpose(2, -0.9), tpose(2, 0.9)], 30.0, 320, 240).unwrap()[0];
+        save("two.png", img);
+        let (mut blue, mut orange) = (0, 0);
+        for y in 0..240 {
+            for x in 0..320 {
+                let p = img.pixel(x, y);
+                if !is_figure(p) {
+                    continue;
+                }
+                if p[2] as i32 > p[0] as i32 + 40 {
+                    blue += 1;
+                } else if p[0] as i32 > p[2] as i32 + 60 {
+                    orange += 1;
+                }
+            }
+        }
+        assert!(blue > 300 && orange > 300, "blue {blue} orange {orange}");
+    }
+
+    #[test]
+    fn raw_joints_draw_spheres_and_time_is_resampled() {
+        let mut t = tpose(31, 0.0);
+        t.parents = vec![None; 24];
+        let frames = render_frames(&[t], 10.0, 160, 120).unwrap();
+        // 1 s at 30 fps = 31 frames -> 11 frames at 10 fps.
+        assert_eq!(frames.len(), 11);
+        let n = frames[5]
+            .data
+            .chunks(3)
+            .filter(|p| is_figure([p[0], p[1], p[2]]))
+            .count();
+        assert!(n > 100, "{n}");
+    }
+
+    #[test]
+    fn bad_tracks_are_errors() {
+        let mut t = tpose(2, 0.0);
+        t.joints.pop();
+        assert!(render_frames(&[t], 30.0, 64, 48).is_err());
+        assert!(render_frames(&[], 30.0, 64, 48).is_err());
+    }
+
+    #[test]
+    fn gif_round_trips_and_stores_only_changes() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.gif");
+        let scene = Scene::new(&[tpose(20, 0.0)], &RenderOptions::new(160, 120)).unwrap();
+        let n = write::write_gif(&p, scene.stream(15.0), 15.0).unwrap();
+        assert_eq!(n, scene.frame_count(15.0));
+        let mut opts = gif::DecodeOptions::new();
+        opts.set_color_output(gif::ColorOutput::Indexed);
+        let mut d = opts.read_info(std::fs::File::open(&p).unwrap()).unwrap();
+        let mut count = 0;
+        while let Some(f) = d.read_next_frame().unwrap() {
+            if count > 0 {
+                assert!(f.width < 160 || f.height < 120);
+            }
+            assert!(f.delay == 7 || f.delay == 6, "{}", f.delay);
+            count += 1;
+        }
+        assert_eq!(count, n);
+    }
+
+    #[test]
+    fn missing_ffmpeg_is_a_clear_error() {
+        // Only the error path; the CLI test covers a real ffmpeg when there is one.
+        let e = RenderError::FfmpegMissing.to_string();
+        assert!(e.contains("install ffmpeg") && e.contains(".gif"));
+    }
+}
