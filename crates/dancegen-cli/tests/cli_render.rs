@@ -162,6 +162,35 @@ fn mp4_uses_ffmpeg_or_says_to_install_it() {
         let bytes = std::fs::read(&out).unwrap();
         assert_eq!(&bytes[4..8], b"ftyp");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // With --audio the song is muxed in: the file has a video and an audio stream.
+        let song =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/demo_metal_madness_45s.ogg");
+        let with_audio = dir.path().join("a.mp4");
+        let mut a: Vec<&str> = args[..args.len() - 2].to_vec();
+        a.extend([
+            "--audio",
+            song.to_str().unwrap(),
+            "-o",
+            with_audio.to_str().unwrap(),
+        ]);
+        ok(&dancegen(&a));
+        let probe = Command::new("ffprobe")
+            .args([
+                "-v",
+                "error",
+                "-show_entries",
+                "stream=codec_type",
+                "-of",
+                "csv=p=0",
+            ])
+            .arg(&with_audio)
+            .output()
+            .expect("ffprobe comes with ffmpeg");
+        let streams = String::from_utf8_lossy(&probe.stdout);
+        assert!(
+            streams.contains("video") && streams.contains("audio"),
+            "streams: {streams}"
+        );
     }
     // Without ffmpeg (forced here, so this part always runs) the error says what to do.
     let o = Command::new(env!("CARGO_BIN_EXE_dancegen"))
