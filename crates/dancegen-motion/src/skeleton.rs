@@ -191,6 +191,22 @@ impl Skeleton {
         Skeleton::from_rest_joints(&SMPLX55_NAMES, &SMPLX55_PARENTS, rest_joints)
     }
 
+    /// An **approximate** SMPL-H 52 skeleton of our own, for when no SMPL-H/SMPL-X model file
+    /// is available (their rest joints are non-commercial and not shipped, see
+    /// [`Skeleton::smplh52`]). Names and parents are [`SMPLH52_NAMES`] / [`SMPLH52_PARENTS`];
+    /// offsets are [`SMPLH52_APPROX_OFFSETS`]: the body 0–21 is EDGE's SMPL 24 table
+    /// ([`SMPL24_OFFSETS`], MIT) and the 30 finger joints are placed from anthropometric
+    /// proportions documented on that constant. Good for synthetic tests, visualisation and
+    /// representation round trips; not a substitute for a fitted SMPL-H hand.
+    pub fn smplh52_approx() -> Self {
+        Skeleton::from_parent_indices(
+            &SMPLH52_NAMES,
+            &SMPLH52_PARENTS,
+            SMPLH52_APPROX_OFFSETS.to_vec(),
+        )
+        .expect("built-in approximate SMPL-H 52 table is valid")
+    }
+
     /// Number of joints.
     pub fn len(&self) -> usize {
         self.names.len()
@@ -487,6 +503,68 @@ const fn smplh52_mirror() -> [usize; 52] {
             out[k] = smplx_to_smplh(SMPLX55_MIRROR[j]);
         }
         j += 1;
+    }
+    out
+}
+
+/// Parent-relative rest offsets (Y-up, metres) of [`Skeleton::smplh52_approx`]: our own
+/// approximation, **not** SMPL-H's rest joints.
+///
+/// - Joints 0–21: [`SMPL24_OFFSETS`] (EDGE `vis.py`, MIT) unchanged.
+/// - Fingers, left hand (22–36, SMPL-H order index, middle, pinky, ring, thumb × 3), in the
+///   SMPL rest T-pose: the left arm points along +X, the palm faces down (−Y), the thumb side
+///   is forward (+Z). The right hand (37–51) is the exact mirror (x negated).
+/// - Scale: hand length (wrist crease → middle fingertip) ≈ 0.19 m, the usual ≈ 11 % of a
+///   1.7 m stature; palm (wrist → middle knuckle) 0.105 m ≈ 55 % of it, middle finger
+///   0.085 m ≈ 45 %. Other fingers relative to the middle one: index 0.92, ring 0.95,
+///   pinky 0.75.
+/// - `*1` = wrist → MCP knuckle (the metacarpal; offsets fan across the palm from
+///   z = +0.025 m for the index to z = −0.033 m for the pinky, knuckles 5 mm below the wrist
+///   axis, the outer fingers' knuckles shorter along X); `*2` = proximal phalanx (0.45 of the
+///   finger length), `*3` = middle phalanx (0.30). The distal phalanx (0.25) has no joint in
+///   SMPL-H (no fingertips), so it does not appear. Fingers are straight along +X.
+/// - Thumb: `thumb1` (CMC, base of the first metacarpal) sits 2.5 cm forward (+Z), 1.2 cm
+///   down and 2.5 cm out from the wrist; `thumb2` (MCP) is the first metacarpal, 0.045 m
+///   pointing out, forward and down; `thumb3` (IP) is the proximal phalanx, 0.032 m further
+///   along the same direction.
+#[rustfmt::skip]
+pub const SMPLH52_APPROX_OFFSETS: [[f64; 3]; 52] = smplh52_approx_offsets();
+
+const fn smplh52_approx_offsets() -> [[f64; 3]; 52] {
+    // Middle-finger length and the per-finger scale; phalanx fractions 0.45 / 0.30 (/ 0.25).
+    const MID: f64 = 0.085;
+    const PROX: f64 = 0.45;
+    const MIDP: f64 = 0.30;
+    // Thumb metacarpal / proximal-phalanx direction: out (+X), forward (+Z), down (−Y),
+    // normalised: (0.60, −0.30, 0.74) has norm 1.0 to 3 decimals (0.36 + 0.09 + 0.5476).
+    const TD: [f64; 3] = [0.6, -0.3, 0.74];
+    #[rustfmt::skip]
+    const LEFT: [[f64; 3]; 15] = [
+        // index: knuckle, proximal, middle phalanx (finger length 0.92 · MID)
+        [0.098, -0.005, 0.025], [0.92 * MID * PROX, 0.0, 0.0], [0.92 * MID * MIDP, 0.0, 0.0],
+        // middle (1.0 · MID)
+        [0.105, -0.005, 0.006], [MID * PROX, 0.0, 0.0], [MID * MIDP, 0.0, 0.0],
+        // pinky (0.75 · MID)
+        [0.088, -0.005, -0.033], [0.75 * MID * PROX, 0.0, 0.0], [0.75 * MID * MIDP, 0.0, 0.0],
+        // ring (0.95 · MID)
+        [0.098, -0.005, -0.014], [0.95 * MID * PROX, 0.0, 0.0], [0.95 * MID * MIDP, 0.0, 0.0],
+        // thumb: CMC, metacarpal 0.045 m, proximal phalanx 0.032 m
+        [0.025, -0.012, 0.025],
+        [0.045 * TD[0], 0.045 * TD[1], 0.045 * TD[2]],
+        [0.032 * TD[0], 0.032 * TD[1], 0.032 * TD[2]],
+    ];
+    let mut out = [[0.0; 3]; 52];
+    let mut j = 0;
+    while j < 22 {
+        out[j] = SMPL24_OFFSETS[j];
+        j += 1;
+    }
+    let mut k = 0;
+    while k < 15 {
+        let o = LEFT[k];
+        out[22 + k] = o;
+        out[37 + k] = [-o[0], o[1], o[2]];
+        k += 1;
     }
     out
 }

@@ -27,7 +27,11 @@
 //! Differences from HumanML3D: no skeleton "uniformisation" (the EDGE SMPL offsets are used as
 //! they are), and `rot` holds the **true SMPL local rotations** instead of HumanML3D's
 //! twist-free IK; HumanML3D runs at 20 fps, here the motion's own rate is kept (the 0.002
-//! threshold is per frame). The 52-joint 623 and the face-extended 723 are not implemented.
+//! threshold is per frame).
+//!
+//! The building blocks ([`dims_for_joints`], [`RicLayout`] and the crate-internal encoder /
+//! decoder) are generic over the joint count; [`super::holistic`] uses them for the 52-joint
+//! SoulNet 623 / 723.
 
 use super::motion::{POSE_DIMS, SMPL_JOINTS};
 use super::{ReprError, SmplMotion, frames_of};
@@ -83,9 +87,9 @@ fn qbetween_to_z(v: V3) -> Quat {
     Quat::new(n + v[2], c[0], c[1], c[2]).normalize()
 }
 
-fn forward(p: &[f64], t: usize) -> V3 {
+fn forward(p: &[f64], joints: usize, t: usize) -> V3 {
     let j = |k: usize| {
-        let o = (t * JOINTS + k) * 3;
+        let o = (t * joints + k) * 3;
         [p[o], p[o + 1], p[o + 2]]
     };
     let across = normalize(
@@ -124,7 +128,7 @@ fn gaussian_smooth(x: &[V3], sigma: f64) -> Vec<V3> {
 
 impl HumanMl263 {
     /// Values per frame.
-    pub const DIMS: usize = 263;
+    pub const DIMS: usize = dims_for_joints(JOINTS);
 
     /// Encodes to `(T − 1, 263)`.
     pub fn encode(m: &SmplMotion) -> Result<Vec<f32>, ReprError> {
@@ -140,75 +144,16 @@ impl HumanMl263 {
             ));
         }
         let j24 = m.joints_world()?;
-        let mut p: Vec<f64> = j24
+        let p: Vec<f64> = j24
             .chunks_exact(SMPL_JOINTS * 3)
             .flat_map(|f| f[..JOINTS * 3].iter().map(|&v| v as f64))
             .collect();
-        // 1. floor, 2. frame-0 root xz at origin, 3. face +Z at frame 0.
-        let floor = p
-            .iter()
-            .skip(1)
-            .step_by(3)
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        let (x0, z0) = (p[0], p[2]);
-        for v in p.chunks_exact_mut(3) {
-            v[0] -= x0;
-            v[1] -= floor;
-            v[2] -= z0;
-        }
-        let q_init = qbetween_to_z(normalize(forward(&p, 0)));
-        for v in p.chunks_exact_mut(3) {
-            let r = q_init.rotate([v[0], v[1], v[2]]);
-            v.copy_from_slice(&r);
-        }
-        let fwd: Vec<V3> = (0..t).map(|f| forward(&p, f)).collect();
-        let mut heading: Vec<Quat> = gaussian_smooth(&fwd, HEADING_SIGMA)
-            .into_iter()
-            .map(|v| qbetween_to_z(normalize(v)))
-            .collect();
-        // HumanML3D `qfix`: sign-continuous quaternions, so `asin(y)` of the step has the
-        // right sign when the heading passes through −Z.
-        for f in 1..t {
-            if heading[f].dot(heading[f - 1]) < 0.0 {
-                heading[f] = -heading[f];
-            }
-        }
-        let pj = |f: usize, k: usize| -> V3 {
-            let o = (f * JOINTS + k) * 3;
-            [p[o], p[o + 1], p[o + 2]]
-        };
-        let mut data = Vec::with_capacity((t - 1) * Self::DIMS);
-        for f in 0..t - 1 {
-            let (r0, r1) = (heading[f], heading[f + 1]);
-            let rv = r1 * r0.conjugate();
-            data.push(rv.y.clamp(-1.0, 1.0).asin() as f32);
-            let v = r1.rotate(sub(pj(f + 1, 0), pj(f, 0)));
-            data.extend([v[0] as f32, v[2] as f32]);
-            let root = pj(f, 0);
-            data.push(root[1] as f32);
-            for k in 1..JOINTS {
-                let q = pj(f, k);
-                let ric = r0.rotate([q[0] - root[0], q[1], q[2] - root[2]]);
-                data.extend(ric.map(|v| v as f32));
-            }
-            for k in 1..JOINTS {
-                let r = Mat3::from_axis_angle(m.joint_aa(f, k).map(f64::from));
-                data.extend(r.transpose().to_6d().map(|v| v as f32));
-            }
-            for k in 0..JOINTS {
-                let lv = r0.rotate(sub(pj(f + 1, k), pj(f, k)));
-                data.extend(lv.map(|v| v as f32));
-            }
-            for k in [7, 10, 8, 11] {
-                let d = sub(pj(f + 1, k), pj(f, k));
-                let sq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                data.push(if sq < CONTACT_SQ_THRESHOLD { 1.0 } else { 0.0 });
-            }
-        }
+        let (data, positions, heading) = encode_ric(JOINTS, p, |f, k| {
+            Mat3::from_axis_angle(m.joint_aa(f, k).map(f64::from))
+        });
         Ok(HumanMl263Parts {
             data,
-            positions: p,
+            positions,
             heading,
         })
     }
@@ -217,33 +162,7 @@ impl HumanMl263 {
     /// whose initial heading is the identity (i.e. the canonical positions rotated by
     /// `heading[0]`).
     pub fn decode_joints(data: &[f32]) -> Result<Vec<f32>, ReprError> {
-        let t = frames_of("HumanMl263::decode_joints", data, Self::DIMS)?;
-        let mut out = Vec::with_capacity(t * JOINTS * 3);
-        let mut ang = 0.0f64;
-        let mut pos = [0.0f64; 3];
-        for f in 0..t {
-            let row = &data[f * Self::DIMS..(f + 1) * Self::DIMS];
-            if f > 0 {
-                let prev = &data[(f - 1) * Self::DIMS..f * Self::DIMS];
-                ang += prev[0] as f64;
-            }
-            let q = Quat::new(ang.cos(), 0.0, ang.sin(), 0.0);
-            let qi = q.conjugate();
-            if f > 0 {
-                let prev = &data[(f - 1) * Self::DIMS..f * Self::DIMS];
-                let d = qi.rotate([prev[1] as f64, 0.0, prev[2] as f64]);
-                pos[0] += d[0];
-                pos[2] += d[2];
-            }
-            pos[1] = row[3] as f64;
-            out.extend(pos.map(|v| v as f32));
-            for k in 0..JOINTS - 1 {
-                let c = &row[4 + k * 3..7 + k * 3];
-                let w = qi.rotate([c[0] as f64, c[1] as f64, c[2] as f64]);
-                out.extend([(w[0] + pos[0]) as f32, w[1] as f32, (w[2] + pos[2]) as f32]);
-            }
-        }
-        Ok(out)
+        decode_ric_joints("HumanMl263::decode_joints", data, JOINTS)
     }
 
     /// Decodes to an SMPL motion at `fps`: root position from [`HumanMl263::decode_joints`], root
@@ -251,34 +170,200 @@ impl HumanMl263 {
     /// data), joints 1–21 from the 6D, hands 22, 23 identity.
     pub fn decode(data: &[f32], fps: f32) -> Result<SmplMotion, ReprError> {
         let joints = Self::decode_joints(data)?;
-        let t = joints.len() / (JOINTS * 3);
-        let off = SMPL24_OFFSETS;
-        let rest = frame_basis(sub(off[1], off[2]), off[3]);
-        let mut poses = Vec::with_capacity(t * POSE_DIMS);
-        let mut trans = Vec::with_capacity(t * 3);
-        for f in 0..t {
-            let j = |k: usize| {
-                let o = (f * JOINTS + k) * 3;
-                [joints[o], joints[o + 1], joints[o + 2]].map(f64::from)
-            };
-            let posed = frame_basis(sub(j(1), j(2)), sub(j(3), j(0)));
-            let root = posed.mul(&rest.transpose());
-            trans.extend(j(0).map(|v| v as f32));
-            poses.extend(root.to_axis_angle().map(|v| v as f32));
-            let row = &data[f * Self::DIMS..(f + 1) * Self::DIMS];
-            for d in row[67..193].chunks_exact(6) {
-                let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
-                poses.extend(
-                    Mat3::from_6d(&d)
-                        .transpose()
-                        .to_axis_angle()
-                        .map(|v| v as f32),
-                );
-            }
+        let (aa, trans) = decode_ric_rotations(data, &joints, JOINTS, &SMPL24_OFFSETS);
+        let mut poses = Vec::with_capacity(trans.len() / 3 * POSE_DIMS);
+        for f in aa.chunks_exact(JOINTS * 3) {
+            poses.extend_from_slice(f);
             poses.extend([0.0; 6]);
         }
         SmplMotion::new(fps, poses, trans)
     }
+}
+
+/// Values per frame of the HumanML3D layout generalised to `joints` joints (root 4, ric
+/// 3·(J − 1), rot 6·(J − 1), local velocity 3·J, contacts 4): `12·J − 1`, i.e. 263 for the
+/// 22-joint body and 623 for the 52-joint SMPL-H body + hands ([`super::holistic`]).
+pub const fn dims_for_joints(joints: usize) -> usize {
+    12 * joints - 1
+}
+
+/// Start offsets of the blocks of the generalised layout for `joints` joints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RicLayout {
+    pub joints: usize,
+}
+
+impl RicLayout {
+    /// Values per frame, [`dims_for_joints`].
+    pub const fn dims(self) -> usize {
+        dims_for_joints(self.joints)
+    }
+    /// First ric value (after root rot velocity 1, linear velocity 2, root y 1).
+    pub const fn ric(self) -> usize {
+        4
+    }
+    /// First 6D rotation value.
+    pub const fn rot(self) -> usize {
+        4 + 3 * (self.joints - 1)
+    }
+    /// First local-velocity value.
+    pub const fn vel(self) -> usize {
+        4 + 9 * (self.joints - 1)
+    }
+    /// First foot-contact value (4 contacts follow).
+    pub const fn contacts(self) -> usize {
+        4 + 9 * (self.joints - 1) + 3 * self.joints
+    }
+}
+
+/// The generalised encoder (module docs, steps 1–3 and the per-frame table) for `joints`
+/// joints whose 0–21 are the SMPL body: `p` is `(T, J, 3)` world joints (T ≥ 2), `local(f, k)`
+/// joint `k`'s local rotation at frame `f`. Returns `(data (T − 1, 12J − 1), canonical positions
+/// (T, J, 3), heading (T,))`.
+pub(crate) fn encode_ric(
+    joints: usize,
+    mut p: Vec<f64>,
+    local: impl Fn(usize, usize) -> Mat3,
+) -> (Vec<f32>, Vec<f64>, Vec<Quat>) {
+    let t = p.len() / (joints * 3);
+    let dims = dims_for_joints(joints);
+    // 1. floor, 2. frame-0 root xz at origin, 3. face +Z at frame 0.
+    let floor = p
+        .iter()
+        .skip(1)
+        .step_by(3)
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let (x0, z0) = (p[0], p[2]);
+    for v in p.chunks_exact_mut(3) {
+        v[0] -= x0;
+        v[1] -= floor;
+        v[2] -= z0;
+    }
+    let q_init = qbetween_to_z(normalize(forward(&p, joints, 0)));
+    for v in p.chunks_exact_mut(3) {
+        let r = q_init.rotate([v[0], v[1], v[2]]);
+        v.copy_from_slice(&r);
+    }
+    let fwd: Vec<V3> = (0..t).map(|f| forward(&p, joints, f)).collect();
+    let mut heading: Vec<Quat> = gaussian_smooth(&fwd, HEADING_SIGMA)
+        .into_iter()
+        .map(|v| qbetween_to_z(normalize(v)))
+        .collect();
+    // HumanML3D `qfix`: sign-continuous quaternions, so `asin(y)` of the step has the
+    // right sign when the heading passes through −Z.
+    for f in 1..t {
+        if heading[f].dot(heading[f - 1]) < 0.0 {
+            heading[f] = -heading[f];
+        }
+    }
+    let pj = |f: usize, k: usize| -> V3 {
+        let o = (f * joints + k) * 3;
+        [p[o], p[o + 1], p[o + 2]]
+    };
+    let mut data = Vec::with_capacity(t.saturating_sub(1) * dims);
+    for f in 0..t.saturating_sub(1) {
+        let (r0, r1) = (heading[f], heading[f + 1]);
+        let rv = r1 * r0.conjugate();
+        data.push(rv.y.clamp(-1.0, 1.0).asin() as f32);
+        let v = r1.rotate(sub(pj(f + 1, 0), pj(f, 0)));
+        data.extend([v[0] as f32, v[2] as f32]);
+        let root = pj(f, 0);
+        data.push(root[1] as f32);
+        for k in 1..joints {
+            let q = pj(f, k);
+            let ric = r0.rotate([q[0] - root[0], q[1], q[2] - root[2]]);
+            data.extend(ric.map(|v| v as f32));
+        }
+        for k in 1..joints {
+            data.extend(local(f, k).transpose().to_6d().map(|v| v as f32));
+        }
+        for k in 0..joints {
+            let lv = r0.rotate(sub(pj(f + 1, k), pj(f, k)));
+            data.extend(lv.map(|v| v as f32));
+        }
+        for k in [7, 10, 8, 11] {
+            let d = sub(pj(f + 1, k), pj(f, k));
+            let sq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            data.push(if sq < CONTACT_SQ_THRESHOLD { 1.0 } else { 0.0 });
+        }
+    }
+    (data, p, heading)
+}
+
+/// Generalised `recover_from_ric`: `(T', J, 3)` joints from `(T', 12J − 1)`.
+pub(crate) fn decode_ric_joints(
+    what: &'static str,
+    data: &[f32],
+    joints: usize,
+) -> Result<Vec<f32>, ReprError> {
+    let dims = dims_for_joints(joints);
+    let t = frames_of(what, data, dims)?;
+    let mut out = Vec::with_capacity(t * joints * 3);
+    let mut ang = 0.0f64;
+    let mut pos = [0.0f64; 3];
+    for f in 0..t {
+        let row = &data[f * dims..(f + 1) * dims];
+        if f > 0 {
+            let prev = &data[(f - 1) * dims..f * dims];
+            ang += prev[0] as f64;
+        }
+        let q = Quat::new(ang.cos(), 0.0, ang.sin(), 0.0);
+        let qi = q.conjugate();
+        if f > 0 {
+            let prev = &data[(f - 1) * dims..f * dims];
+            let d = qi.rotate([prev[1] as f64, 0.0, prev[2] as f64]);
+            pos[0] += d[0];
+            pos[2] += d[2];
+        }
+        pos[1] = row[3] as f64;
+        out.extend(pos.map(|v| v as f32));
+        for k in 0..joints - 1 {
+            let c = &row[4 + k * 3..7 + k * 3];
+            let w = qi.rotate([c[0] as f64, c[1] as f64, c[2] as f64]);
+            out.extend([(w[0] + pos[0]) as f32, w[1] as f32, (w[2] + pos[2]) as f32]);
+        }
+    }
+    Ok(out)
+}
+
+/// Local rotations and root translation from the generalised layout: `decoded` is the output
+/// of [`decode_ric_joints`] on `data`, `offsets` the skeleton's rest offsets (only joints 1–3
+/// are used, to solve the root rotation from the decoded pelvis, hips and belly). Returns
+/// `(axis-angle (T', J, 3), trans (T', 3))`.
+pub(crate) fn decode_ric_rotations(
+    data: &[f32],
+    decoded: &[f32],
+    joints: usize,
+    offsets: &[[f64; 3]],
+) -> (Vec<f32>, Vec<f32>) {
+    let layout = RicLayout { joints };
+    let dims = layout.dims();
+    let t = decoded.len() / (joints * 3);
+    let rest = frame_basis(sub(offsets[1], offsets[2]), offsets[3]);
+    let mut poses = Vec::with_capacity(t * joints * 3);
+    let mut trans = Vec::with_capacity(t * 3);
+    for f in 0..t {
+        let j = |k: usize| {
+            let o = (f * joints + k) * 3;
+            [decoded[o], decoded[o + 1], decoded[o + 2]].map(f64::from)
+        };
+        let posed = frame_basis(sub(j(1), j(2)), sub(j(3), j(0)));
+        let root = posed.mul(&rest.transpose());
+        trans.extend(j(0).map(|v| v as f32));
+        poses.extend(root.to_axis_angle().map(|v| v as f32));
+        let row = &data[f * dims..(f + 1) * dims];
+        for d in row[layout.rot()..layout.vel()].chunks_exact(6) {
+            let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
+            poses.extend(
+                Mat3::from_6d(&d)
+                    .transpose()
+                    .to_axis_angle()
+                    .map(|v| v as f32),
+            );
+        }
+    }
+    (poses, trans)
 }
 
 /// Orthonormal basis (as matrix columns) from two non-parallel vectors, Gram-Schmidt.

@@ -12,12 +12,14 @@
 //! | [`FineDance315`] / [`FineDance319`] | (4 +) 3 + 52×6D | Y-up | FineDance / LODGE (C.3) |
 //! | [`GroupEdge151`] | N × (T, 151) | Z-up | TCDiff (C.5) |
 //! | [`HumanMl263`] | 4 root + 21×3 ric + 21×6D (columns) + 22×3 vel + 4 contacts | Y-up, canonicalised | HumanML3D / SoulNet body (C.6) |
+//! | [`Holistic623`] / [`Holistic723`] | the same for SMPL-H 52 (12·52 − 1) (+ 100 face) | Y-up, canonicalised | SoulNet holistic (C.6) |
 //!
 //! [`MinMaxNormalizer`] is EDGE's / LODGE's per-dimension MinMax(−1, 1) normaliser (C.2).
 
 pub mod edge151;
 pub mod finedance;
 pub mod group;
+pub mod holistic;
 pub mod humanml263;
 pub mod lodge139;
 pub mod motion;
@@ -26,6 +28,7 @@ pub mod normalizer;
 pub use edge151::Edge151;
 pub use finedance::{FineDance315, FineDance319, FineDanceMotion};
 pub use group::{GroupEdge151, GroupMotion};
+pub use holistic::{Holistic623, Holistic723, HolisticMotion};
 pub use humanml263::HumanMl263;
 pub use lodge139::Lodge139;
 pub use motion::{GroundMode, SmplMotion};

@@ -1,0 +1,220 @@
+//! SoulNet holistic 623 / 723 (anchors.md C.6) on the approximate SMPL-H 52 skeleton.
+
+mod common;
+
+use dancegen_motion::aistpp::load_motion;
+use dancegen_motion::repr::holistic::{FACE_DIMS, JOINTS, LAYOUT};
+use dancegen_motion::repr::{Holistic623, Holistic723, HumanMl263, SmplMotion};
+use dancegen_motion::rotation::Mat3;
+use dancegen_motion::skeleton::{SMPLH52_MIRROR, SMPLH52_NAMES, SMPLH52_PARENTS, Skeleton};
+
+const SEQ: &str = "gJS_sFM_cAll_d02_mJS4_ch09";
+
+fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// Body from AIST++ (60 → 30 fps by stride 2), fingers with a deterministic curl animation.
+/// Returns `(smpl body motion, poses (T, 52, 3), trans (T, 3))`.
+fn synthetic() -> (SmplMotion, Vec<f32>, Vec<f32>) {
+    let path = common::shared_dir()
+        .join("data/aistpp/motions")
+        .join(format!("{SEQ}.pkl"));
+    let a = load_motion(&path).unwrap();
+    let m = SmplMotion::from_aistpp(&a).resample_stride(2);
+    assert_eq!(m.fps, 30.0);
+    let t = m.frames();
+    let mut poses = Vec::with_capacity(t * JOINTS * 3);
+    for f in 0..t {
+        poses.extend_from_slice(&m.poses[f * 72..f * 72 + 22 * 3]);
+        for hand in 0..2 {
+            // Left hand points along +X: curling toward the palm (−Y) is a negative rotation
+            // about +Z; the mirror image (axis-angle (x, −y, −z)) gives +Z for the right hand.
+            let side = if hand == 0 { -1.0f32 } else { 1.0 };
+            for finger in 0..5 {
+                for seg in 0..3 {
+                    let phase = 0.7 * finger as f32 + 0.4 * seg as f32 + hand as f32;
+                    let curl =
+                        0.6 + 0.55 * (2.0 * std::f32::consts::PI * f as f32 / 45.0 + phase).sin();
+                    let spread = if seg == 0 {
+                        0.15 * (f as f32 / 20.0 + finger as f32).cos()
+                    } else {
+                        0.0
+                    };
+                    if finger == 4 {
+                        // Thumb: opposition about a tilted axis.
+                        poses.extend([0.3 * curl, side * -0.2 * curl, side * 0.5 * curl]);
+                    } else {
+                        poses.extend([0.0, side * spread, side * curl]);
+                    }
+                }
+            }
+        }
+    }
+    let trans = m.trans.clone();
+    (m, poses, trans)
+}
+
+#[test]
+fn approximate_smplh52_skeleton() {
+    let s = Skeleton::smplh52_approx();
+    assert_eq!(s.len(), 52);
+    assert_eq!(s.names(), SMPLH52_NAMES.map(String::from).as_slice());
+    assert_eq!(s.parent_indices(), SMPLH52_PARENTS.to_vec());
+    // Body = EDGE SMPL offsets.
+    let smpl = Skeleton::smpl24();
+    assert_eq!(&s.offsets()[..22], &smpl.offsets()[..22]);
+    // Hands: exact mirrors (x negated).
+    let off = s.offsets();
+    for j in 22..52 {
+        let (a, b) = (off[j], off[SMPLH52_MIRROR[j]]);
+        assert!((a[0] + b[0]).abs() < 1e-9, "{j}");
+        assert!(
+            (a[1] - b[1]).abs() < 1e-9 && (a[2] - b[2]).abs() < 1e-9,
+            "{j}"
+        );
+    }
+    // Left hand points +X; finger segments in plausible ranges (metres).
+    let rest = s.rest_positions();
+    for (base, name) in [(22, "index"), (25, "middle"), (28, "pinky"), (31, "ring")] {
+        assert!(SMPLH52_NAMES[base].starts_with(&format!("left_{name}")));
+        let (knuckle, prox, mid) = (norm(off[base]), norm(off[base + 1]), norm(off[base + 2]));
+        assert!((0.07..0.12).contains(&knuckle), "{name} {knuckle}");
+        assert!((0.025..0.045).contains(&prox), "{name} {prox}");
+        assert!((0.015..0.03).contains(&mid), "{name} {mid}");
+        assert!(off[base][0] > 0.0 && off[base + 1][0] > 0.0 && off[base + 2][0] > 0.0);
+        // Proximal : middle phalanx = 0.45 : 0.30.
+        assert!((prox / mid - 1.5).abs() < 1e-9);
+        // Finger tips (middle-phalanx end + distal 0.25) within a hand length of the wrist.
+        let tip = rest[base + 2][0] + mid / 0.30 * 0.25 - rest[20][0];
+        assert!((0.14..0.2).contains(&tip), "{name} {tip}");
+    }
+    // Middle finger: hand length ≈ 0.19 m.
+    let hand = rest[27][0] + norm(off[27]) / 0.30 * 0.25 - rest[20][0];
+    assert!((hand - 0.19).abs() < 1e-3, "{hand}");
+    // Palm width (index to pinky knuckle) 5–9 cm; thumb forward (+Z) and down.
+    let width = rest[22][2] - rest[28][2];
+    assert!((0.05..0.09).contains(&width), "{width}");
+    for (j, o) in off.iter().enumerate().take(37).skip(34) {
+        assert!(o[2] > 0.0 && o[1] < 0.0, "{j}");
+        assert!((0.02..0.06).contains(&norm(*o)), "{j}");
+    }
+    eprintln!(
+        "smplh52_approx: hand length {hand:.4} m, palm width {width:.4} m, thumb tip z {:.4}",
+        rest[36][2] - rest[20][2]
+    );
+}
+
+#[test]
+fn holistic623_round_trip() {
+    let (m, poses, trans) = synthetic();
+    let t = m.frames();
+    let skel = Skeleton::smplh52_approx();
+    assert_eq!(Holistic623::DIMS, 623);
+    assert_eq!(LAYOUT.rot(), 4 + 153);
+    assert_eq!(LAYOUT.vel(), 4 + 153 + 306);
+    assert_eq!(LAYOUT.contacts(), 619);
+    let parts = Holistic623::encode_with(&skel, &poses, &trans, 30.0).unwrap();
+    assert_eq!(parts.data.len(), (t - 1) * 623);
+    assert_eq!(
+        Holistic623::encode(&poses, &trans, 30.0).unwrap(),
+        parts.data
+    );
+    // recover_from_ric == canonical joints rotated by the initial heading.
+    let dec = Holistic623::decode_joints(&parts.data).unwrap();
+    let h0 = parts.heading[0];
+    let want: Vec<f32> = parts.positions[..(t - 1) * JOINTS * 3]
+        .chunks_exact(3)
+        .flat_map(|p| h0.rotate([p[0], p[1], p[2]]).map(|v| v as f32))
+        .collect();
+    let err = max_abs_diff(&dec, &want);
+    let hand_err = dec
+        .chunks_exact(JOINTS * 3)
+        .zip(want.chunks_exact(JOINTS * 3))
+        .map(|(a, b)| max_abs_diff(&a[22 * 3..], &b[22 * 3..]))
+        .fold(0.0, f32::max);
+    // FK of the decoded motion reproduces the decoded joints.
+    let sm = Holistic623::decode(&parts.data, 30.0).unwrap();
+    assert_eq!(sm.frames(), t - 1);
+    assert!(sm.face.is_none());
+    let fk = sm.joints_world_with(&skel).unwrap();
+    let ferr = max_abs_diff(&fk, &dec);
+    // Decoded local rotations (joints 1–51) equal the input ones.
+    let mut rerr = 0.0f64;
+    for f in 0..t - 1 {
+        for k in 1..JOINTS {
+            let o = (f * JOINTS + k) * 3;
+            let aa = |p: &[f32]| Mat3::from_axis_angle([p[o], p[o + 1], p[o + 2]].map(f64::from));
+            let (a, b) = (aa(&poses), aa(&sm.poses));
+            for (x, y) in a.0.iter().flatten().zip(b.0.iter().flatten()) {
+                rerr = rerr.max((x - y).abs());
+            }
+        }
+    }
+    eprintln!(
+        "{SEQ} ({t} frames @30): Holistic623 ric recovery err {err:.2e} m (hands {hand_err:.2e} m), \
+         FK(decode) vs ric {ferr:.2e} m, local rotation matrix err {rerr:.2e}"
+    );
+    assert!(err < 1e-5, "{err}");
+    assert!(ferr < 1e-5, "{ferr}");
+    assert!(rerr < 1e-5, "{rerr}");
+    // The fingers actually move in the ric block.
+    let first = &parts.data[LAYOUT.ric() + 21 * 3..LAYOUT.rot()];
+    let later = &parts.data[20 * 623 + LAYOUT.ric() + 21 * 3..20 * 623 + LAYOUT.rot()];
+    assert!(max_abs_diff(first, later) > 1e-2);
+    // Contacts are binary; the body part agrees with the 22-joint HumanML263 where it does not
+    // depend on the floor (root velocities, body 6D, body local velocities).
+    let body = HumanMl263::encode(&m).unwrap();
+    let (mut root_err, mut rot_err, mut vel_err) = (0.0f32, 0.0f32, 0.0f32);
+    for (h, b) in parts.data.chunks_exact(623).zip(body.chunks_exact(263)) {
+        assert!(h[619..].iter().all(|&c| c == 0.0 || c == 1.0));
+        root_err = root_err.max(max_abs_diff(&h[..3], &b[..3]));
+        rot_err = rot_err.max(max_abs_diff(&h[157..157 + 126], &b[67..193]));
+        vel_err = vel_err.max(max_abs_diff(&h[463..463 + 66], &b[193..259]));
+    }
+    eprintln!(
+        "vs HumanML263: root vel {root_err:.2e}, body rot {rot_err:.2e}, body vel {vel_err:.2e}"
+    );
+    assert!(root_err < 1e-5 && rot_err < 1e-5 && vel_err < 1e-5);
+}
+
+#[test]
+fn holistic723_face_pass_through() {
+    let (_, poses, trans) = synthetic();
+    let t = trans.len() / 3;
+    assert_eq!(Holistic723::DIMS, 723);
+    let face: Vec<f32> = (0..t * FACE_DIMS)
+        .map(|i| ((i as f32) * 0.618_034).sin() * 1.5 + 1e-7 * i as f32)
+        .collect();
+    let enc = Holistic723::encode(&poses, &trans, Some(&face), 30.0).unwrap();
+    assert_eq!(enc.len(), (t - 1) * 723);
+    // Body/hands part equals the 623 encoding.
+    let body = Holistic623::encode(&poses, &trans, 30.0).unwrap();
+    let (b, fp) = Holistic723::split(&enc).unwrap();
+    assert_eq!(b, body);
+    assert_eq!(fp, face[..(t - 1) * FACE_DIMS]);
+    let dec = Holistic723::decode(&enc, 30.0).unwrap();
+    assert_eq!(dec.face.as_deref(), Some(&face[..(t - 1) * FACE_DIMS]));
+    assert_eq!(
+        Holistic723::decode_joints(&enc).unwrap(),
+        Holistic623::decode_joints(&body).unwrap()
+    );
+    // No face → zeros.
+    let enc0 = Holistic723::encode(&poses, &trans, None, 30.0).unwrap();
+    let dec0 = Holistic723::decode(&enc0, 30.0).unwrap();
+    assert!(dec0.face.unwrap().iter().all(|&v| v == 0.0));
+    // Shape errors.
+    assert!(Holistic723::encode(&poses, &trans, Some(&face[..FACE_DIMS]), 30.0).is_err());
+    assert!(Holistic623::encode(&poses[..JOINTS * 3], &trans[..3], 30.0).is_err());
+    assert!(Holistic623::encode(&poses, &trans[3..], 30.0).is_err());
+    assert!(Holistic623::decode(&enc, 30.0).is_err());
+    assert!(Holistic623::encode_with(&Skeleton::smpl24(), &poses, &trans, 30.0).is_err());
+}
