@@ -140,6 +140,24 @@ fn every_output_format_writes_and_reads_back() {
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
     assert!(err < 1e-5, "npz round trip {err}");
+    // An SMPL-skeleton BVH comes back to SMPL by joint names with --to smpl24.
+    let from_bvh = dir.path().join("from_bvh.npy");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        dir.path().join("m.bvh").to_str().unwrap(),
+        "--to",
+        "smpl24",
+        "-o",
+        from_bvh.to_str().unwrap(),
+    ]));
+    let got = dancegen_io::read_npy(&from_bvh).unwrap().data;
+    let err = got
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-5, "BVH round trip {err}");
 }
 
 #[test]

@@ -179,6 +179,13 @@ pub fn convert_motion(
     opts: &ConvertOptions,
 ) -> Result<LoadedMotion, FormatError> {
     let m = match (m, opts.to_smpl24) {
+        (LoadedMotion::Bvh(b), true) if is_smpl_bvh(&b) => {
+            // Already an SMPL 24 skeleton (e.g. written by `convert`): read the rotations back.
+            let (poses, trans) = bvh_motion::bvh_to_smpl(&b).map_err(|e| err(path, e))?;
+            let motion =
+                SmplMotion::new(b.nominal_fps() as f32, poses, trans).map_err(|e| err(path, e))?;
+            LoadedMotion::Smpl(motion)
+        }
         (LoadedMotion::Bvh(b), true) => {
             // Keep the source rate unless asked otherwise; retargeting then subsamples.
             let target = opts.fps.map_or(b.nominal_fps(), f64::from);
@@ -230,6 +237,14 @@ pub fn convert_motion(
             positions: resample_linear(&positions, joints * 3, src, fps),
         },
     })
+}
+
+/// Whether a BVH carries every SMPL 24 joint by name.
+fn is_smpl_bvh(b: &Bvh) -> bool {
+    Skeleton::smpl24()
+        .names()
+        .iter()
+        .all(|n| b.joint_index(n).is_some())
 }
 
 /// Changes a raw BVH's frame rate by keeping every k-th frame (integer ratios only; Euler
