@@ -1,23 +1,9 @@
 //! The `convert` command contract: `.npy` output = world joints (T, J, 3), metres, Y-up for SMPL
 //! inputs; the BVH's own joints in its units without `--to`; retargeted SMPL 24 with it.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn dancegen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dancegen"))
-        .args(args)
-        .output()
-        .expect("run dancegen")
-}
-
-fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
+use common::*;
 
 const AIST: &str = "data/aistpp/motions/gBR_sBM_cAll_d04_mBR2_ch08.pkl";
 

@@ -1,22 +1,8 @@
 //! The `features` and `beats` command contracts external tools rely on.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn dancegen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dancegen"))
-        .args(args)
-        .output()
-        .expect("run dancegen")
-}
-
-fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::*;
 
 #[test]
 fn features_npy_is_t_by_35_float32_c_order() {

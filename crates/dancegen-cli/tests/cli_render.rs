@@ -1,23 +1,12 @@
 //! The `render` command: PNG and GIF previews of an AIST++ motion decode and show the figure;
 //! MP4 goes through ffmpeg when it is installed and fails with a clear message otherwise.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn dancegen(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dancegen"))
-        .args(args)
-        .output()
-        .expect("run dancegen")
-}
+use std::path::Path;
+use std::process::Command;
 
-fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
+use common::*;
 
 const AIST: &str = "data/aistpp/motions/gBR_sBM_cAll_d04_mBR2_ch08.pkl";
 
