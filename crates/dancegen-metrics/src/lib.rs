@@ -3,6 +3,8 @@
 //! - [`kinetic`]: the 72 kinetic features behind FID_k / Div_k
 //!   (`google/aistplusplus_api:aist_plusplus/features/kinetic.py`, origin
 //!   `facebookresearch/fairmotion`), with the reference's acceleration precedence bug.
+//! - [`fid`] / [`mod@diversity`]: FID and all-pairs diversity with GT-stat normalisation
+//!   (`lisiyao21/Bailando:utils/metrics_new.py`).
 //! - [`manual`]: the 32 geometric ("manual_new") features behind FID_g / Div_g
 //!   (`google/aistplusplus_api:aist_plusplus/features/manual.py` ==
 //!   `lisiyao21/Bailando:utils/features/manual_new.py`).
@@ -12,9 +14,13 @@
 
 use std::path::Path;
 
+pub mod diversity;
+pub mod fid;
 pub mod kinetic;
 pub mod manual;
 
+pub use diversity::diversity;
+pub use fid::{frechet_distance, normalize_by_gt};
 pub use kinetic::{KineticVariant, kinetic_features, try_kinetic_features, zero_start};
 pub use manual::{manual_feature_flags, manual_features, try_manual_features};
 
