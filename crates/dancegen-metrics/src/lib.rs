@@ -14,10 +14,14 @@
 
 use std::path::Path;
 
+pub mod bas;
 pub mod diversity;
 pub mod fid;
+pub mod foot_skating;
 pub mod kinetic;
 pub mod manual;
+pub mod mpjpe;
+pub mod pfc;
 
 pub use diversity::diversity;
 pub use fid::{frechet_distance, normalize_by_gt};
