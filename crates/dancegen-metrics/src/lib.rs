@@ -16,9 +16,12 @@ use std::path::Path;
 
 pub mod bas;
 pub mod diversity;
+pub mod duet;
 pub mod fid;
 pub mod foot_skating;
+pub mod group;
 pub mod kinetic;
+pub mod longform;
 pub mod manual;
 pub mod mpjpe;
 pub mod pfc;
