@@ -27,6 +27,62 @@ pub enum Command {
     Convert(ConvertArgs),
     /// Render a preview of one or more dancers: PNG (one frame), GIF or MP4 (with audio).
     Render(RenderArgs),
+    /// Dance metrics (FID, diversity, BAS, PFC, foot skating, MPJPE, ...) under a paper's protocol.
+    Eval(EvalArgs),
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProtocolArg {
+    /// Bailando / AIST++: 60 fps, first 1200 frames, zero-start root, frame time 1/60.
+    AistppBailando,
+    /// LODGE / FineDance: 30 fps, first 1024 frames, root-relative joints, 22 joints.
+    FinedanceLodge,
+    /// EDGE: 30 fps, 150-frame (5 s) clips, frame time 1/60.
+    #[value(name = "edge-5s")]
+    Edge5s,
+    /// Positions as given, frame time 1/fps.
+    None,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BasVariantArg {
+    Bailando,
+    Lodge,
+    Fact,
+    Gcd,
+}
+
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Generated motion: files or directories (any format `convert` reads, or joints .npy
+    /// (T, 24, 3) in metres, Y-up).
+    #[arg(long, required = true, num_args = 1..)]
+    pub pred: Vec<PathBuf>,
+    /// Ground-truth motion (files or directories); needed by fid_*, mpjpe and the *_gt values.
+    #[arg(long, num_args = 1..)]
+    pub gt: Vec<PathBuf>,
+    /// Evaluation protocol (no resampling: the motion must already be at its frame rate).
+    #[arg(long, value_enum, default_value_t = ProtocolArg::None)]
+    pub protocol: ProtocolArg,
+    /// Frame rate of .npy inputs (default: the protocol's).
+    #[arg(long)]
+    pub fps: Option<f64>,
+    /// Comma-separated metrics (default: all that the inputs allow):
+    /// fid_k,fid_g,div_k,div_g,bas,pfc,fsr,mpjpe,freeze,boundary_jerk.
+    #[arg(long)]
+    pub metrics: Option<String>,
+    /// Beat-align-score variant.
+    #[arg(long, value_enum, default_value_t = BasVariantArg::Bailando)]
+    pub bas_variant: BasVariantArg,
+    /// Music beats: .npy of beat frame indices, or a (T, 35) feature file (beats = last column).
+    #[arg(long, conflicts_with = "music")]
+    pub beats: Option<PathBuf>,
+    /// Song to compute the music beats from (at the motion's frame rate, 30 or 60).
+    #[arg(long)]
+    pub music: Option<PathBuf>,
+    /// Write the results as JSON.
+    #[arg(long, value_name = "OUT")]
+    pub json: Option<PathBuf>,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

@@ -25,6 +25,7 @@ pub mod longform;
 pub mod manual;
 pub mod mpjpe;
 pub mod pfc;
+pub mod protocol;
 
 pub use diversity::diversity;
 pub use fid::{frechet_distance, normalize_by_gt};
