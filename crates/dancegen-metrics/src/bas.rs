@@ -183,21 +183,25 @@ fn alignment_score_f32(
 /// joints of `‖P[t+1, j] − P[t, j]‖` (float64, numpy's summation order).
 pub fn mean_joint_speed(joints: &[f64], frames: usize) -> Vec<f64> {
     (0..frames.saturating_sub(1))
-        .map(|t| {
-            let mut norms = [0.0f64; NUM_JOINTS];
-            for (j, n) in norms.iter_mut().enumerate() {
-                let a = t * FRAME_LEN + j * 3;
-                let b = a + FRAME_LEN;
-                let mut s = 0.0;
-                for c in 0..3 {
-                    let d = joints[b + c] - joints[a + c];
-                    s += d * d;
-                }
-                *n = s.sqrt();
-            }
-            pairwise_sum(&norms) / NUM_JOINTS as f64
-        })
+        .map(|t| pairwise_sum(&joint_step_speeds(joints, t)) / NUM_JOINTS as f64)
         .collect()
+}
+
+/// `‖P[t+1, j] − P[t, j]‖` for every joint (float64), the per-step speeds the motion-beat
+/// extractors of Bailando and Duolando average.
+pub fn joint_step_speeds(joints: &[f64], t: usize) -> [f64; NUM_JOINTS] {
+    let mut norms = [0.0f64; NUM_JOINTS];
+    for (j, n) in norms.iter_mut().enumerate() {
+        let a = t * FRAME_LEN + j * 3;
+        let b = a + FRAME_LEN;
+        let mut s = 0.0;
+        for c in 0..3 {
+            let d = joints[b + c] - joints[a + c];
+            s += d * d;
+        }
+        *n = s.sqrt();
+    }
+    norms
 }
 
 /// mint/GCD `motion_peak_onehot` envelope: `e_0 = 0`, `e_t = Σ_j ‖P[t, j] − P[t−1, j]‖` with the

@@ -27,7 +27,7 @@
 //! joints (identical in both layouts), but the BED speed is the mean over the **55** expanded
 //! joints, so the head and hands weigh 3 × and 15 × — as the reference on such data.
 
-use crate::bas::{Variant, argrelmin, beat_align_score, gaussian_filter1d};
+use crate::bas::{Variant, argrelmin, beat_align_score, gaussian_filter1d, joint_step_speeds};
 use crate::fid::{EPS_BAILANDO, frechet_distance, normalize_by_gt};
 use crate::{FRAME_LEN, FeatureError, diversity, frame_count};
 
@@ -108,17 +108,7 @@ pub fn duet_motion_beats(joints: &[f64]) -> Result<Vec<usize>, FeatureError> {
     let frames = frame_count(joints)?;
     let speed: Vec<f64> = (0..frames.saturating_sub(1))
         .map(|t| {
-            let mut per_joint = [0.0f64; 24];
-            for (j, n) in per_joint.iter_mut().enumerate() {
-                let a = t * FRAME_LEN + j * 3;
-                let b = a + FRAME_LEN;
-                let mut s = 0.0;
-                for c in 0..3 {
-                    let d = joints[b + c] - joints[a + c];
-                    s += d * d;
-                }
-                *n = s.sqrt();
-            }
+            let per_joint = joint_step_speeds(joints, t);
             let expanded = SMPLX55_FROM_SMPL24.map(|j| per_joint[j]);
             numpy_sum(&expanded) / expanded.len() as f64
         })

@@ -10,7 +10,10 @@
 //! features are counts of boolean predicates divided by `T − 1` in float32 and must match
 //! exactly.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::kinetic::REFERENCE_FRAME_TIME;
 use dancegen_metrics::{
@@ -18,17 +21,6 @@ use dancegen_metrics::{
 };
 
 const REL_TOL: f64 = 1e-6;
-
-fn metrics_fixtures() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let dir = root.join("../shared/fixtures/metrics");
-    assert!(
-        dir.is_dir(),
-        "tests need ../shared/fixtures/metrics next to the project root (looked in {})",
-        dir.display()
-    );
-    dir
-}
 
 fn read_golden(path: &Path) -> Vec<f64> {
     dancegen_io::read_npy(path)

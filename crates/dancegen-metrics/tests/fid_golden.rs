@@ -15,23 +15,15 @@
 //!   sqrtm_calls`), i.e. ~1e-5 absolute on FID (< 1e-7 relative); the reference's float32
 //!   normalisation / Div sum gives ~1e-7 relative.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::fid::EPS_BAILANDO;
 use dancegen_metrics::{diversity, frechet_distance, normalize_by_gt};
 
 const REL_TOL: f64 = 1e-6;
-
-fn metrics_fixtures() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let dir = root.join("../shared/fixtures/metrics");
-    assert!(
-        dir.is_dir(),
-        "tests need ../shared/fixtures/metrics next to the project root (looked in {})",
-        dir.display()
-    );
-    dir
-}
 
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

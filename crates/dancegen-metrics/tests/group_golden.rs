@@ -3,17 +3,14 @@
 //! `(N, 150, 24, 3)`. Tolerance: relative 1e-6 (group kinetic features compared after the
 //! reference's float32 cast); measured values are printed with `--nocapture`.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::group::{gmc, gmc_pair, gmr, group_kinetic_features, group_mmc};
 
 const REL_TOL: f64 = 1e-6;
-
-fn metrics_fixtures() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fixtures/metrics");
-    assert!(dir.is_dir(), "missing {}", dir.display());
-    dir
-}
 
 fn rel(a: f64, g: f64) -> f64 {
     if a == g { 0.0 } else { (a - g).abs() / g.abs() }

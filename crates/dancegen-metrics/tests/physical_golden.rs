@@ -13,7 +13,10 @@
 //! - MPJPE (`xjli360/SoulDance-Official:utils/metrics.py::calculate_mpjpe`): per-pose arrays and
 //!   means, float64 reference, relative tolerance 1e-6.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::foot_skating::{
     FootSkating, foot_skating_from_grounded_feet, foot_skating_ratio, mean_foot_skating,
@@ -23,17 +26,6 @@ use dancegen_metrics::pfc::{pfc_clip_score, pfc_from_clip_scores};
 use serde_json::Value;
 
 const REL_TOL: f64 = 1e-6;
-
-fn metrics_fixtures() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let dir = root.join("../shared/fixtures/metrics");
-    assert!(
-        dir.is_dir(),
-        "tests need ../shared/fixtures/metrics next to the project root (looked in {})",
-        dir.display()
-    );
-    dir
-}
 
 fn read_json(path: &Path) -> Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
