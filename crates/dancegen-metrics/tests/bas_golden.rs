@@ -7,22 +7,15 @@
 //! variant ([`clip_music_beats`]); LODGE uses the whole-song list `lodge_beats_from_wav_fps30.npy`.
 //! The set means in the JSON are recomputed from our per-clip scores as well.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, motion_beats};
 use dancegen_metrics::read_joints;
 
 const REL_TOL: f64 = 1e-6;
-
-fn bas_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fixtures/metrics");
-    assert!(
-        dir.is_dir(),
-        "tests need ../shared/fixtures/metrics next to the project root (looked in {})",
-        dir.display()
-    );
-    dir
-}
 
 fn read_indices(path: &Path) -> Vec<usize> {
     dancegen_io::read_npy(path)
@@ -45,7 +38,7 @@ fn rel(a: f64, g: f64) -> f64 {
 
 #[test]
 fn bas_matches_reference_golden_files() {
-    let dir = bas_dir();
+    let dir = metrics_fixtures();
     let out = dir.join("outputs/bas");
     let beats30 = read_indices(&out.join("music_beats_real_freezingpoint_fps30.npy"));
     let beats60 = read_indices(&out.join("music_beats_real_freezingpoint_fps60.npy"));

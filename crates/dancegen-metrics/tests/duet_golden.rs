@@ -14,7 +14,10 @@
 //! - per pair: follower and leader motion beats identical, BED relative 1e-12; the set means of
 //!   BED relative 1e-12 (measured: per pair bit-identical, means 1.3e-16).
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::metrics_fixtures;
+use std::path::Path;
 
 use dancegen_metrics::duet::{
     SMPLX55_FROM_SMPL24, beat_echo_degree, cross_distance_feature, duet_fid_div, duet_motion_beats,
@@ -23,16 +26,6 @@ use dancegen_metrics::read_joints;
 
 const REL_TOL: f64 = 1e-6;
 const TIGHT: f64 = 1e-12;
-
-fn fixtures() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fixtures/metrics");
-    assert!(
-        dir.is_dir(),
-        "tests need ../shared/fixtures/metrics next to the project root (looked in {})",
-        dir.display()
-    );
-    dir
-}
 
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
@@ -46,7 +39,7 @@ const GT: [&str; 4] = ["gt_duet1", "gt_duet2", "gt_duet3", "gt_duet4"];
 const GEN: [&str; 4] = ["gen_duet1", "gen_duet2", "gen_duet3", "gen_duet4"];
 
 fn pair(name: &str) -> (Vec<f64>, Vec<f64>) {
-    let dir = fixtures().join("inputs/duets");
+    let dir = metrics_fixtures().join("inputs/duets");
     let f = read_joints(&dir.join(format!("{name}_follower_smpl24_yup_30fps.npy"))).unwrap();
     let l = read_joints(&dir.join(format!("{name}_leader_smpl24_yup_30fps.npy"))).unwrap();
     (f, l)
@@ -54,7 +47,7 @@ fn pair(name: &str) -> (Vec<f64>, Vec<f64>) {
 
 fn stored_feature(name: &str) -> Vec<f64> {
     let set = if name.starts_with("gt") { "gt" } else { "pred" };
-    let path = fixtures().join(format!(
+    let path = metrics_fixtures().join(format!(
         "outputs/duolando/{set}/duet_features/{name}_00.npy"
     ));
     let arr = dancegen_io::read_npy(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -64,7 +57,7 @@ fn stored_feature(name: &str) -> Vec<f64> {
 
 #[test]
 fn manifest_mapping_matches() {
-    let man = read_json(&fixtures().join("inputs/manifest.json"));
+    let man = read_json(&metrics_fixtures().join("inputs/manifest.json"));
     let idx: Vec<usize> = man["smplx55_from_smpl24_index"]
         .as_array()
         .unwrap()
@@ -76,7 +69,7 @@ fn manifest_mapping_matches() {
 
 #[test]
 fn cross_distance_features_and_fid_div() {
-    let golden = read_json(&fixtures().join("outputs/duolando/duolando_duet_metrics.json"));
+    let golden = read_json(&metrics_fixtures().join("outputs/duolando/duolando_duet_metrics.json"));
     let q = &golden["quantized_metrics"];
     let mut worst = 0.0f64;
     let mut ours = |names: &[&str]| -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
@@ -116,7 +109,7 @@ fn cross_distance_features_and_fid_div() {
 
 #[test]
 fn beat_echo_degree_per_pair_and_means() {
-    let golden = read_json(&fixtures().join("outputs/duolando/duolando_duet_metrics.json"));
+    let golden = read_json(&metrics_fixtures().join("outputs/duolando/duolando_duet_metrics.json"));
     let beats = |v: &serde_json::Value| -> Vec<usize> {
         v.as_array()
             .unwrap()

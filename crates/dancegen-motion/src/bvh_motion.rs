@@ -156,12 +156,34 @@ pub fn bvh_world_positions_with_end_sites(
     bvh_world_positions_ext(bvh, scale, true)
 }
 
+/// Runs BVH FK over every frame, calling `visit(frame, &transforms)`; the one frame loop that
+/// positions and world transforms are both read from.
+fn for_each_frame_fk(
+    bvh: &Bvh,
+    scale: f64,
+    mut visit: impl FnMut(usize, &BvhFrameFk),
+) -> Result<(), BvhMotionError> {
+    bvh.validate()?;
+    let nj = bvh.joints.len();
+    let starts = channel_starts(bvh);
+    let nc = bvh.num_channels();
+    let mut fk = BvhFrameFk {
+        rot: vec![Mat3::IDENTITY; nj],
+        pos: vec![[0.0; 3]; nj],
+    };
+    for f in 0..bvh.frames {
+        let row = &bvh.data[f * nc..(f + 1) * nc];
+        frame_fk(bvh, &starts, row, scale, &mut fk);
+        visit(f, &fk);
+    }
+    Ok(())
+}
+
 fn bvh_world_positions_ext(
     bvh: &Bvh,
     scale: f64,
     end_sites: bool,
 ) -> Result<(usize, usize, Vec<f64>), BvhMotionError> {
-    bvh.validate()?;
     let nj = bvh.joints.len();
     let ends: Vec<(usize, [f64; 3])> = if end_sites {
         bvh.joints
@@ -173,21 +195,8 @@ fn bvh_world_positions_ext(
         Vec::new()
     };
     let np = nj + ends.len();
-    let starts = channel_starts(bvh);
-    let nc = bvh.num_channels();
     let mut out = vec![0.0; bvh.frames * np * 3];
-    let mut fk = BvhFrameFk {
-        rot: vec![Mat3::IDENTITY; nj],
-        pos: vec![[0.0; 3]; nj],
-    };
-    let empty: [f64; 0] = [];
-    for f in 0..bvh.frames {
-        let row = if nc == 0 {
-            &empty[..]
-        } else {
-            &bvh.data[f * nc..(f + 1) * nc]
-        };
-        frame_fk(bvh, &starts, row, scale, &mut fk);
+    for_each_frame_fk(bvh, scale, |f, fk| {
         let dst = &mut out[f * np * 3..(f + 1) * np * 3];
         for (i, p) in fk.pos.iter().enumerate() {
             dst[i * 3..i * 3 + 3].copy_from_slice(p);
@@ -196,7 +205,7 @@ fn bvh_world_positions_ext(
             let p = add(fk.pos[i], fk.rot[i].mul_vec(scaled(e, scale)));
             dst[(nj + k) * 3..(nj + k) * 3 + 3].copy_from_slice(&p);
         }
-    }
+    })?;
     Ok((bvh.frames, np, out))
 }
 
@@ -206,27 +215,13 @@ pub fn bvh_world_transforms(
     bvh: &Bvh,
     scale: f64,
 ) -> Result<(Vec<Mat3>, Vec<[f64; 3]>), BvhMotionError> {
-    bvh.validate()?;
     let nj = bvh.joints.len();
-    let starts = channel_starts(bvh);
-    let nc = bvh.num_channels();
     let mut rots = Vec::with_capacity(bvh.frames * nj);
     let mut poss = Vec::with_capacity(bvh.frames * nj);
-    let mut fk = BvhFrameFk {
-        rot: vec![Mat3::IDENTITY; nj],
-        pos: vec![[0.0; 3]; nj],
-    };
-    let empty: [f64; 0] = [];
-    for f in 0..bvh.frames {
-        let row = if nc == 0 {
-            &empty[..]
-        } else {
-            &bvh.data[f * nc..(f + 1) * nc]
-        };
-        frame_fk(bvh, &starts, row, scale, &mut fk);
+    for_each_frame_fk(bvh, scale, |_, fk| {
         rots.extend_from_slice(&fk.rot);
         poss.extend_from_slice(&fk.pos);
-    }
+    })?;
     Ok((rots, poss))
 }
 
