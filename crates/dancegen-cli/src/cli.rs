@@ -54,21 +54,30 @@ pub enum BasVariantArg {
 
 #[derive(Args, Debug)]
 pub struct EvalArgs {
-    /// Generated motion: files or directories (any format `convert` reads, or joints .npy
-    /// (T, 24, 3) in metres, Y-up).
+    /// Generated motion: files or directories (any format `convert` reads, joints .npy
+    /// (T, 24, 3) in metres, Y-up, or group scenes (N, T, 24, 3)).
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Ground-truth motion (files or directories); needed by fid_*, mpjpe and the *_gt values.
+    /// Ground-truth motion (files or directories); needed by fid_*, mpjpe, gmr and the *_gt
+    /// values.
     #[arg(long, num_args = 1..)]
     pub gt: Vec<PathBuf>,
+    /// Duets: the leader of each --pred (follower) clip, matched by file stem. Without it, a
+    /// two-dancer clip (2, T, 24, 3) is read as [leader, follower] by the duet metrics.
+    #[arg(long, num_args = 1..)]
+    pub leader: Vec<PathBuf>,
+    /// Duets: the leader of each --gt (follower) clip, matched by file stem.
+    #[arg(long, num_args = 1..)]
+    pub gt_leader: Vec<PathBuf>,
     /// Evaluation protocol (no resampling: the motion must already be at its frame rate).
     #[arg(long, value_enum, default_value_t = ProtocolArg::None)]
     pub protocol: ProtocolArg,
     /// Frame rate of .npy inputs (default: the protocol's).
     #[arg(long)]
     pub fps: Option<f64>,
-    /// Comma-separated metrics (default: all that the inputs allow):
-    /// fid_k,fid_g,div_k,div_g,bas,pfc,fsr,mpjpe,freeze,boundary_jerk.
+    /// Comma-separated metrics (default: all that the inputs allow; duet metrics by default only
+    /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,gmr,gmc,tif,fid_cd,div_cd,bed,
+    /// freeze,boundary_jerk.
     #[arg(long)]
     pub metrics: Option<String>,
     /// Beat-align-score variant.

@@ -3,10 +3,10 @@
 mod cli;
 mod cmd_beats;
 mod cmd_convert;
-mod cmd_eval;
 mod cmd_features;
 mod cmd_render;
 mod demo;
+mod eval;
 mod plot;
 mod progress;
 
@@ -26,7 +26,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Beats(args) => cmd_beats::run(args, cli.quiet),
         cli::Command::Convert(args) => cmd_convert::run(args, cli.quiet),
         cli::Command::Render(args) => cmd_render::run(args, cli.quiet),
-        cli::Command::Eval(args) => cmd_eval::run(args, cli.quiet),
+        cli::Command::Eval(args) => eval::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -179,10 +179,240 @@ fn bad_inputs_give_clear_errors() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("60 fps"), "{}", stderr(&o));
 
-    // Group/duet metrics are not in eval yet.
-    let o = dancegen(&["eval", "--pred", s(&src), "--metrics", "gmr"]);
+    // Group and duet metrics on solo clips name what they need.
+    for (m, need) in [("gmc", "group scenes"), ("bed", "duets"), ("gmr", "--gt")] {
+        let o = dancegen(&["eval", "--pred", s(&src), "--fps", "60", "--metrics", m]);
+        assert!(!o.status.success(), "{m}");
+        assert!(stderr(&o).contains(need), "{m}: {}", stderr(&o));
+    }
+
+    // A follower without a leader of its stem.
+    let lead = dir.path().join("leaders");
+    std::fs::create_dir_all(&lead).unwrap();
+    std::fs::copy(&src, lead.join("someone_else.npy")).unwrap();
+    let o = dancegen(&[
+        "eval",
+        "--pred",
+        s(&src),
+        "--leader",
+        s(&lead),
+        "--fps",
+        "60",
+    ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("not yet available"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no --leader clip"), "{}", stderr(&o));
+
+    // Unknown metric names fail before any file is read.
+    let o = dancegen(&["eval", "--pred", "/nonexistent", "--metrics", "fid_x"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("unknown metric fid_x"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Copies `inputs/scenes/<prefix>_scene{1..4}_yup_30fps.npy` to `dir/<prefix>/scene{i}.npy`.
+fn scene_set(dir: &Path, prefix: &str) -> PathBuf {
+    let to = dir.join(prefix);
+    std::fs::create_dir_all(&to).unwrap();
+    for i in 1..=4 {
+        let from = shared().join(format!(
+            "fixtures/metrics/inputs/scenes/{prefix}_scene{i}_yup_30fps.npy"
+        ));
+        std::fs::copy(from, to.join(format!("scene{i}.npy"))).unwrap();
+    }
+    to
+}
+
+fn golden_values() -> serde_json::Value {
+    read_json(&shared().join("fixtures/metrics/golden_values.json"))
+}
+
+fn assert_rel(what: &str, got: f64, want: f64, tol: f64) {
+    let rel = if got == want {
+        0.0
+    } else {
+        (got - want).abs() / want.abs().max(1e-300)
+    };
+    println!("{what}: ours {got} golden {want} rel {rel:.2e}");
+    assert!(
+        rel <= tol,
+        "{what}: ours {got} vs golden {want} (rel {rel:.2e})"
+    );
+}
+
+#[test]
+fn group_metrics_match_gcd_golden() {
+    let dir = tempfile::tempdir().unwrap();
+    let pred = scene_set(dir.path(), "gen");
+    let gt = scene_set(dir.path(), "gt");
+    let out = dir.path().join("group.json");
+    ok(&dancegen(&[
+        "eval",
+        "--pred",
+        s(&pred),
+        "--gt",
+        s(&gt),
+        "--fps",
+        "30",
+        "--metrics",
+        "gmr,gmc,tif,fid_k",
+        "--json",
+        s(&out),
+    ]));
+    let ours = read_json(&out);
+    let g = &golden_values()["gcd"];
+    assert_rel(
+        "gmr",
+        ours["gmr"].as_f64().unwrap(),
+        g["GMR_k"].as_f64().unwrap(),
+        1e-6,
+    );
+    assert_rel(
+        "gmc",
+        ours["gmc"].as_f64().unwrap(),
+        g["gmc_mean_generated"].as_f64().unwrap(),
+        1e-9,
+    );
+    let rows = ours["per_clip"].as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    for (i, row) in rows.iter().enumerate() {
+        let want = g["GMC_per_scene"][format!("gen_scene{}", i + 1)]
+            .as_f64()
+            .unwrap();
+        assert_rel(
+            &format!("gmc scene{}", i + 1),
+            row["gmc"].as_f64().unwrap(),
+            want,
+            1e-9,
+        );
+        let tif = row["tif"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&tif), "tif {tif}");
+        assert!(row["dancers"].as_u64().unwrap() >= 2);
+    }
+    // fid_k counts every dancer as one solo sample (TCDiff): finite with 2-3 dancers per scene.
+    assert!(ours["fid_k"].as_f64().is_some());
+}
+
+/// Copies the fixture duets to `dir/<prefix>_{f,l}/duet{i}.npy` (follower and leader share a
+/// stem) and to `dir/<prefix>_pairs/duet{i}.npy` as (2, T, 24, 3) [leader, follower].
+fn duet_set(dir: &Path, prefix: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let (f, l, pairs) = (
+        dir.join(format!("{prefix}_f")),
+        dir.join(format!("{prefix}_l")),
+        dir.join(format!("{prefix}_pairs")),
+    );
+    for d in [&f, &l, &pairs] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    for i in 1..=4 {
+        let src = |role: &str| {
+            shared().join(format!(
+                "fixtures/metrics/inputs/duets/{prefix}_duet{i}_{role}_smpl24_yup_30fps.npy"
+            ))
+        };
+        std::fs::copy(src("follower"), f.join(format!("duet{i}.npy"))).unwrap();
+        std::fs::copy(src("leader"), l.join(format!("duet{i}.npy"))).unwrap();
+        let fa = dancegen_io::read_npy(&src("follower")).unwrap();
+        let la = dancegen_io::read_npy(&src("leader")).unwrap();
+        assert_eq!(fa.shape, la.shape);
+        let mut shape = vec![2];
+        shape.extend(&fa.shape);
+        let data: Vec<f32> = la.data.iter().chain(&fa.data).map(|&v| v as f32).collect();
+        dancegen_io::write_npy_f32(&pairs.join(format!("duet{i}.npy")), &shape, &data).unwrap();
+    }
+    (f, l, pairs)
+}
+
+#[test]
+fn duet_metrics_match_duolando_golden() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gen_f, gen_l, gen_pairs) = duet_set(dir.path(), "gen");
+    let (gt_f, gt_l, gt_pairs) = duet_set(dir.path(), "gt");
+    let g = &golden_values()["duolando"];
+
+    // Leaders as separate files, matched by stem (float64 inputs: the golden precision).
+    let out = dir.path().join("duet.json");
+    ok(&dancegen(&[
+        "eval",
+        "--pred",
+        s(&gen_f),
+        "--leader",
+        s(&gen_l),
+        "--gt",
+        s(&gt_f),
+        "--gt-leader",
+        s(&gt_l),
+        "--fps",
+        "30",
+        "--metrics",
+        "fid_cd,div_cd,bed",
+        "--json",
+        s(&out),
+    ]));
+    let ours = read_json(&out);
+    assert_rel(
+        "fid_cd",
+        ours["fid_cd"].as_f64().unwrap(),
+        g["FID_cd"].as_f64().unwrap(),
+        1e-6,
+    );
+    assert_rel(
+        "div_cd",
+        ours["div_cd"].as_f64().unwrap(),
+        g["Div_cd"].as_f64().unwrap(),
+        1e-6,
+    );
+    assert_rel(
+        "div_cd_gt",
+        ours["div_cd_gt"].as_f64().unwrap(),
+        g["Div_cd_gt"].as_f64().unwrap(),
+        1e-6,
+    );
+    assert_rel(
+        "bed",
+        ours["bed"].as_f64().unwrap(),
+        g["BED_mean_generated"].as_f64().unwrap(),
+        1e-9,
+    );
+    for (i, row) in ours["per_clip"].as_array().unwrap().iter().enumerate() {
+        let want = g["BED_per_pair"][format!("gen_duet{}", i + 1)]
+            .as_f64()
+            .unwrap();
+        assert_rel(
+            &format!("bed duet{}", i + 1),
+            row["bed"].as_f64().unwrap(),
+            want,
+            1e-9,
+        );
+    }
+
+    // Two-dancer clips [leader, follower] give the same duet metrics (float32 storage here, so
+    // a looser tolerance than the golden).
+    let out2 = dir.path().join("pairs.json");
+    ok(&dancegen(&[
+        "eval",
+        "--pred",
+        s(&gen_pairs),
+        "--gt",
+        s(&gt_pairs),
+        "--fps",
+        "30",
+        "--metrics",
+        "fid_cd,div_cd,bed",
+        "--json",
+        s(&out2),
+    ]));
+    let pairs = read_json(&out2);
+    for k in ["fid_cd", "div_cd", "bed"] {
+        assert_rel(
+            k,
+            pairs[k].as_f64().unwrap(),
+            ours[k].as_f64().unwrap(),
+            1e-4,
+        );
+    }
 }
 
 #[test]

@@ -39,8 +39,7 @@
 //! float32 re-run of FK, so inputs sitting within float32 rounding of a threshold can flip. On the
 //! fixture intermediates (the exact positions the reference thresholds) the ratios match exactly.
 //!
-//! Not implemented: Duolando's "foot-skating duration"
-//! (`lisiyao21/Duolando:utils/metric_footskating_dur.py`, no golden fixture).
+//! Duolando's "foot-skating duration" is a different measure: [`crate::foot_skating_duration`].
 
 /// Left ankle joint index.
 pub const L_ANKLE: usize = 7;

@@ -9,8 +9,61 @@
 //!   (`google/aistplusplus_api:aist_plusplus/features/manual.py` ==
 //!   `lisiyao21/Bailando:utils/features/manual_new.py`).
 //!
+//! - [`bas`]: beat alignment in the four published variants; [`pfc`], [`foot_skating`],
+//!   [`foot_skating_duration`], [`mpjpe`]: physical plausibility and reconstruction;
+//!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
+//!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation.
+//!
 //! Inputs are global joint positions, SMPL 24-joint order, **Y-up**, metres, flattened C order
-//! `(T, 24, 3)`: value `joints[(t * 24 + j) * 3 + c]`.
+//! `(T, 24, 3)`: value `joints[(t * 24 + j) * 3 + c]`. No files, no framework: plain slices in,
+//! numbers out, so the functions can be called from any program.
+//!
+//! # Example
+//!
+//! FID_k and Div_k of a generated set against ground truth as Bailando computes them, and the
+//! beat-align score of one clip:
+//!
+//! ```
+//! use dancegen_metrics::bas::{Variant, beat_align_score, motion_beats};
+//! use dancegen_metrics::fid::EPS_BAILANDO;
+//! use dancegen_metrics::protocol::AISTPP_BAILANDO;
+//! use dancegen_metrics::{KineticVariant, diversity, frechet_distance, kinetic_features,
+//!     normalize_by_gt};
+//!
+//! // A toy clip: 240 frames at 60 fps of 24 joints swaying with phase `phase`.
+//! fn clip(phase: f64) -> Vec<f64> {
+//!     let mut j = Vec::with_capacity(240 * 72);
+//!     for t in 0..240 {
+//!         for k in 0..24 {
+//!             let s = (t as f64 / 60.0 * 4.0 + phase + k as f64 * 0.1).sin();
+//!             j.extend([0.1 * s, 1.0 + 0.02 * k as f64, 0.05 * s * s]);
+//!         }
+//!     }
+//!     j
+//! }
+//! let gt: Vec<Vec<f64>> = (0..4).map(|i| clip(i as f64)).collect();
+//! let pred: Vec<Vec<f64>> = (0..4).map(|i| clip(0.5 + 0.7 * i as f64)).collect();
+//!
+//! // Protocol: cut to 1200 frames, zero-start root, frame time 1/60 (Bailando on AIST++).
+//! let features = |set: &[Vec<f64>]| -> Vec<Vec<f64>> {
+//!     set.iter()
+//!         .map(|j| {
+//!             let p = AISTPP_BAILANDO.prepare(j, 24, 60.0).unwrap();
+//!             kinetic_features(&p.joints, p.frame_time, KineticVariant::Reference).to_vec()
+//!         })
+//!         .collect()
+//! };
+//! let (g, p) = normalize_by_gt(&features(&gt), &features(&pred));
+//! let fid_k = frechet_distance(&p, &g, EPS_BAILANDO);
+//! let div_k = diversity(&p);
+//! assert!(fid_k.is_finite() && fid_k >= 0.0 && div_k > 0.0);
+//!
+//! // Beat alignment: music beats (frame indices) against the clip's motion beats.
+//! let music = [30, 60, 90, 120, 150, 180, 210];
+//! let score = beat_align_score(&music, &motion_beats(&pred[0], Variant::Bailando),
+//!     Variant::Bailando);
+//! assert!(score.is_some_and(|s| (0.0..=1.0).contains(&s)));
+//! ```
 
 use std::path::Path;
 
@@ -19,6 +72,7 @@ pub mod diversity;
 pub mod duet;
 pub mod fid;
 pub mod foot_skating;
+pub mod foot_skating_duration;
 pub mod group;
 pub mod kinetic;
 pub mod longform;
@@ -29,6 +83,7 @@ pub mod protocol;
 
 pub use diversity::diversity;
 pub use fid::{frechet_distance, normalize_by_gt};
+pub use foot_skating_duration::foot_skating_duration;
 pub use kinetic::{KineticVariant, kinetic_features, try_kinetic_features, zero_start};
 pub use manual::{manual_feature_flags, manual_features, try_manual_features};
 

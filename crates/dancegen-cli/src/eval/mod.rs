@@ -1,0 +1,355 @@
+//! `dancegen eval`: dance metrics of generated motion (and ground truth) under a paper's protocol.
+//!
+//! Inputs are clips: a solo clip is one dancer; a group scene (`(N, T, 24, 3)` `.npy` or a group
+//! motion file) holds `N` dancers of equal length.
+//!
+//! - Solo metrics, per clip: `bas` (needs `--beats` or `--music`), `pfc` (EDGE, on the Z-up
+//!   rotation `(x, −z, y)`), `fsr` (LODGE foot-skating ratio), `mpjpe` (against the `--gt` clip of
+//!   the same file stem), `freeze`, `boundary_jerk` (boundaries every 150 frames, EDGE's 5-second
+//!   windows at 30 fps), `fsd` (Duolando foot-skating duration in %, pooled over all clips' frame
+//!   steps as the reference prints it). Over the set: `fid_k`, `fid_g`, `div_k`, `div_g` (Bailando: features
+//!   normalised by the GT statistics; without `--gt`, `div_*` is the diversity of the raw
+//!   features). In a scene every dancer counts as a solo sequence (TCDiff); its per-clip value is
+//!   the mean over its dancers. `pfc` is scaled by 10⁴ as EDGE prints it.
+//! - Group metrics (scenes only, world positions): `gmr` (set, needs `--gt` scenes), `gmc`,
+//!   `tif` (per scene).
+//! - Duet metrics (Duolando, world positions): the follower is the `--pred` clip and its leader
+//!   the `--leader` clip of the same stem (`--gt-leader` for `--gt`), or a two-dancer clip is
+//!   `[leader, follower]`. `fid_cd` (needs GT duets), `div_cd` over the set, `bed` per duet.
+//!
+//! A set value is the mean over the clips where the metric is defined; undefined clips are
+//! `null` in `per_clip` and warned about.
+
+mod duet;
+mod group;
+mod input;
+mod report;
+mod solo;
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, bail};
+use dancegen_metrics::bas::Variant;
+use dancegen_metrics::fid::EPS_BAILANDO;
+use dancegen_metrics::{diversity, frechet_distance, normalize_by_gt};
+use serde_json::{Value, json};
+
+use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
+use input::Clip;
+
+/// Every metric `eval` knows, in table order (names are a contract: external checks read them).
+const METRICS: [&str; 17] = [
+    "fid_k",
+    "fid_g",
+    "div_k",
+    "div_g",
+    "bas",
+    "pfc",
+    "fsr",
+    "fsd",
+    "mpjpe",
+    "gmr",
+    "gmc",
+    "tif",
+    "fid_cd",
+    "div_cd",
+    "bed",
+    "freeze",
+    "boundary_jerk",
+];
+
+/// Metrics with one value per clip, in `per_clip` order.
+const PER_CLIP: [&str; 10] = [
+    "bas",
+    "pfc",
+    "fsr",
+    "fsd",
+    "mpjpe",
+    "freeze",
+    "boundary_jerk",
+    "gmc",
+    "tif",
+    "bed",
+];
+
+/// What the inputs offer, to choose the default metrics and reject impossible requests.
+struct Offer {
+    gt: bool,
+    beats: bool,
+    pred_groups: bool,
+    gt_groups: bool,
+    pred_duets: bool,
+    gt_duets: bool,
+}
+
+impl Offer {
+    /// `Err(reason)` if metric `m` cannot be computed from these inputs.
+    fn check(&self, m: &str) -> Result<(), &'static str> {
+        match m {
+            "fid_k" | "fid_g" | "mpjpe" if !self.gt => Err("needs --gt"),
+            "bas" if !self.beats => Err("needs --beats or --music"),
+            "gmr" if !(self.pred_groups && self.gt_groups) => {
+                Err("needs group scenes (N, T, 24, 3) in both --pred and --gt")
+            }
+            "gmc" | "tif" if !self.pred_groups => Err("needs group scenes (N, T, 24, 3) in --pred"),
+            "fid_cd" if !(self.pred_duets && self.gt_duets) => {
+                Err("needs duets in --pred and --gt (--leader / --gt-leader, or two-dancer clips)")
+            }
+            "div_cd" | "bed" if !self.pred_duets => {
+                Err("needs duets in --pred (--leader, or two-dancer clips)")
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether `m` is computed when `--metrics` is not given.
+    fn default_on(&self, m: &str, args: &EvalArgs) -> bool {
+        match m {
+            // Duet metrics by default only when leaders are given: a two-dancer scene is a group
+            // unless the user asks for duet metrics.
+            "fid_cd" | "div_cd" | "bed" => !args.leader.is_empty() && self.check(m).is_ok(),
+            _ => self.check(m).is_ok(),
+        }
+    }
+}
+
+fn parse_metric_list(list: &str) -> Result<Vec<String>> {
+    let mut out: Vec<String> = Vec::new();
+    for m in list.split(',').map(str::trim).filter(|m| !m.is_empty()) {
+        if !METRICS.contains(&m) {
+            bail!("unknown metric {m}; known: {}", METRICS.join(","));
+        }
+        if !out.iter().any(|o| o == m) {
+            out.push(m.to_string());
+        }
+    }
+    if out.is_empty() {
+        bail!("--metrics is empty");
+    }
+    Ok(out)
+}
+
+pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
+    let protocol = match args.protocol {
+        ProtocolArg::AistppBailando => dancegen_metrics::protocol::AISTPP_BAILANDO,
+        ProtocolArg::FinedanceLodge => dancegen_metrics::protocol::FINEDANCE_LODGE,
+        ProtocolArg::Edge5s => dancegen_metrics::protocol::EDGE_5S,
+        ProtocolArg::None => dancegen_metrics::protocol::NONE,
+    };
+    let variant = match args.bas_variant {
+        BasVariantArg::Bailando => Variant::Bailando,
+        BasVariantArg::Lodge => Variant::Lodge,
+        BasVariantArg::Fact => Variant::Fact,
+        BasVariantArg::Gcd => Variant::Gcd,
+    };
+    // Unknown names fail before any file is read.
+    let requested = args.metrics.as_deref().map(parse_metric_list).transpose()?;
+    if !args.gt_leader.is_empty() && args.gt.is_empty() {
+        bail!("--gt-leader needs --gt (the GT followers)");
+    }
+
+    let load = |inputs: &[std::path::PathBuf], flag: &str| -> Result<Vec<Clip>> {
+        if inputs.is_empty() {
+            return Ok(Vec::new());
+        }
+        input::load_set(inputs, &protocol, args.fps).with_context(|| flag.to_string())
+    };
+    let pred = load(&args.pred, "--pred")?;
+    let gt = load(&args.gt, "--gt")?;
+    let leaders = load(&args.leader, "--leader")?;
+    let gt_leaders = load(&args.gt_leader, "--gt-leader")?;
+    let pred_pairs = duet::pairs(&pred, &leaders, "--leader")?;
+    let gt_pairs = duet::pairs(&gt, &gt_leaders, "--gt-leader")?;
+
+    let offer = Offer {
+        gt: !gt.is_empty(),
+        beats: args.beats.is_some() || args.music.is_some(),
+        pred_groups: pred.iter().any(Clip::is_group),
+        gt_groups: gt.iter().any(Clip::is_group),
+        pred_duets: pred_pairs.iter().any(Option::is_some),
+        gt_duets: gt_pairs.iter().any(Option::is_some),
+    };
+    let metrics: Vec<String> = match requested {
+        Some(list) => {
+            for m in &list {
+                if let Err(why) = offer.check(m) {
+                    bail!("metric {m} {why}");
+                }
+            }
+            list
+        }
+        None => {
+            let gt_stems: Vec<String> = gt.iter().map(Clip::stem).collect();
+            let paired = pred.iter().any(|c| gt_stems.contains(&c.stem()));
+            METRICS
+                .iter()
+                .filter(|m| offer.default_on(m, args))
+                // By default mpjpe only when some --pred clip has a --gt clip of its stem.
+                .filter(|m| **m != "mpjpe" || paired)
+                .map(|m| m.to_string())
+                .collect()
+        }
+    };
+    let want = |m: &str| metrics.iter().any(|x| x == m);
+
+    let music_beats = if want("bas") {
+        Some(solo::music_beats(args, &pred)?)
+    } else {
+        None
+    };
+    let music = music_beats.as_deref().unwrap_or(&[]);
+
+    let mut summary: BTreeMap<String, Value> = BTreeMap::new();
+
+    // Set metrics: FID / Div on kinetic and geometric features.
+    for (kind, fid_key, div_key) in [("k", "fid_k", "div_k"), ("g", "fid_g", "div_g")] {
+        if !(want(fid_key) || want(div_key)) {
+            continue;
+        }
+        let p = solo::features(&pred, kind, &protocol)?;
+        let g = solo::features(&gt, kind, &protocol)?;
+        fid_div(&mut summary, &g, &p, fid_key, div_key, want);
+    }
+    if want("gmr") {
+        let p = group::gmr_features(&pred)?;
+        let g = group::gmr_features(&gt)?;
+        let (fd, _) = dancegen_metrics::group::gmr(&g, &p);
+        summary.insert("gmr".into(), num(fd));
+    }
+    if want("fid_cd") || want("div_cd") {
+        let p = duet::features(&pred, &pred_pairs)?;
+        let g = duet::features(&gt, &gt_pairs)?;
+        fid_div(&mut summary, &g, &p, "fid_cd", "div_cd", want);
+    }
+
+    // Per-clip metrics.
+    let gt_by_stem: BTreeMap<String, &Clip> = gt.iter().map(|c| (c.stem(), c)).collect();
+    let mut per_clip = Vec::new();
+    let mut columns: BTreeMap<&str, Vec<Option<f64>>> = BTreeMap::new();
+    let mut fsd_all = Vec::new();
+    for (clip, pair) in pred.iter().zip(&pred_pairs) {
+        let mut row = serde_json::Map::new();
+        row.insert("file".into(), json!(clip.path.display().to_string()));
+        row.insert("frames".into(), json!(clip.frames()));
+        row.insert("dancers".into(), json!(clip.dancers.len()));
+        for m in PER_CLIP.into_iter().filter(|m| want(m)) {
+            let (v, quiet_none) = match m {
+                "bas" => (solo::clip_bas(clip, music, variant)?, false),
+                "mpjpe" => match gt_by_stem.get(&clip.stem()) {
+                    Some(g) => (solo::clip_mpjpe(clip, g)?, false),
+                    None => {
+                        tracing::warn!(
+                            "{}: no --gt clip with the same file stem; mpjpe skipped",
+                            clip.path.display()
+                        );
+                        (None, true)
+                    }
+                },
+                "fsd" => {
+                    let d = solo::skating_duration(clip)?;
+                    fsd_all.push(d);
+                    (d.percent(), false)
+                }
+                // Not a scene / not a duet: nothing to measure, nothing to warn about.
+                "gmc" | "tif" => (group::clip_metric(m, clip)?, !clip.is_group()),
+                "bed" => match pair {
+                    Some(p) => (duet::bed(clip, p)?, false),
+                    None => (None, true),
+                },
+                other => (
+                    solo::over_dancers(clip, |d| solo::clip_metric(other, d))
+                        .with_context(|| format!("{}: {other}", clip.path.display()))?,
+                    false,
+                ),
+            };
+            if v.is_none() && !quiet_none {
+                tracing::warn!(
+                    "{}: {m} is undefined for this clip (excluded from the mean)",
+                    clip.path.display()
+                );
+            }
+            row.insert(m.into(), v.map_or(Value::Null, num));
+            columns.entry(m).or_default().push(v);
+        }
+        per_clip.push(Value::Object(row));
+    }
+    for m in PER_CLIP.into_iter().filter(|m| want(m)) {
+        let vals: Vec<f64> = columns
+            .get(m)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .collect();
+        let scale = if m == "pfc" {
+            dancegen_metrics::pfc::PFC_SCALE
+        } else {
+            1.0
+        };
+        let value = if m == "fsd" {
+            dancegen_metrics::foot_skating_duration::pooled_percent(&fsd_all)
+        } else {
+            mean(&vals).map(|v| v * scale)
+        };
+        summary.insert(m.into(), value.map_or(Value::Null, num));
+    }
+    if want("bas") && offer.gt {
+        let mut vals = Vec::new();
+        for c in &gt {
+            match solo::clip_bas(c, music, variant)? {
+                Some(v) => vals.push(v),
+                None => tracing::warn!(
+                    "{}: bas is undefined for this clip (excluded from bas_gt)",
+                    c.path.display()
+                ),
+            }
+        }
+        summary.insert("bas_gt".into(), mean(&vals).map_or(Value::Null, num));
+    }
+
+    report::print_table(&summary, &protocol, pred.len(), gt.len());
+    if let Some(out) = &args.json {
+        report::write_json(out, &summary, &protocol, per_clip)?;
+    }
+    Ok(())
+}
+
+/// FID (needs GT) and diversity of one feature kind. With GT, both sets are normalised by the
+/// GT statistics (Bailando / Duolando) and `<div>_gt` is added; without, the diversity of the
+/// raw features.
+fn fid_div(
+    summary: &mut BTreeMap<String, Value>,
+    gt: &[Vec<f64>],
+    pred: &[Vec<f64>],
+    fid_key: &str,
+    div_key: &str,
+    want: impl Fn(&str) -> bool,
+) {
+    if pred.len() < 2 && want(div_key) {
+        tracing::warn!("{div_key} needs at least two samples");
+    }
+    if !gt.is_empty() {
+        let (g_n, p_n) = normalize_by_gt(gt, pred);
+        if want(fid_key) {
+            summary.insert(
+                fid_key.into(),
+                num(frechet_distance(&p_n, &g_n, EPS_BAILANDO)),
+            );
+        }
+        if want(div_key) {
+            summary.insert(div_key.into(), num(diversity(&p_n)));
+            summary.insert(format!("{div_key}_gt"), num(diversity(&g_n)));
+        }
+    } else if want(div_key) {
+        tracing::warn!("{div_key} without GT: diversity of the raw (not GT-normalised) features");
+        summary.insert(div_key.into(), num(diversity(pred)));
+    }
+}
+
+fn num(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
