@@ -1,0 +1,1 @@
+//! Motion autoencoder: conv encoder → quantizer → conv decoder.

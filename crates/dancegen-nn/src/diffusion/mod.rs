@@ -1,0 +1,1 @@
+//! Diffusion: schedules, DDPM/DDIM sampling with classifier-free guidance, inpainting, PDDM, long-form sampling.

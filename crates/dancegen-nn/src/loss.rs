@@ -1,0 +1,201 @@
+//! Training losses shared by the systems.
+//!
+//! - [`reconstruction`] (L1 / L2 / smooth-L1), [`velocity`], [`acceleration`] on `[B, T, C]`
+//!   sequences (EDGE/Lodge `L_simple`, `L_vel`; T2M-GPT/MoMask velocity loss).
+//! - [`rot6d_to_matrix`] + [`forward_kinematics`]: a differentiable FK for the FK-position losses
+//!   (EDGE `L_FK`, Lodge's root-relative variant), using the skeleton constants of
+//!   `dancegen-motion` (one source of truth for offsets and parents).
+//! - [`foot_contact`]: EDGE's foot loss, velocity of the foot joints on frames where the model's
+//!   own predicted contact exceeds 0.95.
+//! - [`commitment`]: VQ commitment `‖z_e − sg(z_q)‖²`.
+//! - [`info_nce`]: symmetric InfoNCE over a batch of paired embeddings (SoulNet's music–motion
+//!   retrieval).
+//! - [`hinge_discriminator`] / [`hinge_generator`]: hinge GAN (Lodge's genre discriminator).
+
+use burn::tensor::activation::{log_softmax, relu};
+use burn::tensor::{Device, Int, Tensor, TensorData};
+
+/// Element-wise distance of [`reconstruction`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Distance {
+    L1,
+    L2,
+    /// Huber with δ = 1 (PyTorch `smooth_l1_loss`).
+    SmoothL1,
+}
+
+fn distance<const D: usize>(a: Tensor<D>, b: Tensor<D>, kind: Distance) -> Tensor<1> {
+    let d = a - b;
+    match kind {
+        Distance::L1 => d.abs().mean(),
+        Distance::L2 => d.powf_scalar(2.0).mean(),
+        Distance::SmoothL1 => {
+            let abs = d.abs();
+            let small = abs.clone().lower_elem(1.0);
+            let quad = abs.clone().powf_scalar(2.0) * 0.5;
+            let lin = abs - 0.5;
+            lin.mask_where(small, quad).mean()
+        }
+    }
+}
+
+/// Mean distance between prediction and target.
+pub fn reconstruction<const D: usize>(
+    pred: Tensor<D>,
+    target: Tensor<D>,
+    kind: Distance,
+) -> Tensor<1> {
+    distance(pred, target, kind)
+}
+
+fn diff(x: Tensor<3>) -> Tensor<3> {
+    let t = x.dims()[1];
+    x.clone().narrow(1, 1, t - 1) - x.narrow(1, 0, t - 1)
+}
+
+/// Distance between the first differences in time of `[B, T, C]` sequences.
+pub fn velocity(pred: Tensor<3>, target: Tensor<3>, kind: Distance) -> Tensor<1> {
+    distance(diff(pred), diff(target), kind)
+}
+
+/// Distance between the second differences in time.
+pub fn acceleration(pred: Tensor<3>, target: Tensor<3>, kind: Distance) -> Tensor<1> {
+    distance(diff(diff(pred)), diff(diff(target)), kind)
+}
+
+/// pytorch3d `rotation_6d_to_matrix`: `[..., 6]` (the first two **rows**) → `[..., 3, 3]` by
+/// Gram–Schmidt, rows `b1, b2, b1 × b2`. Input `[N, 6]`, output `[N, 3, 3]`.
+pub fn rot6d_to_matrix(d6: Tensor<2>) -> Tensor<3> {
+    let n = d6.dims()[0];
+    let a1 = d6.clone().narrow(1, 0, 3);
+    let a2 = d6.narrow(1, 3, 3);
+    let normalize = |v: Tensor<2>| {
+        let norm = v
+            .clone()
+            .powf_scalar(2.0)
+            .sum_dim(1)
+            .sqrt()
+            .clamp_min(1e-12);
+        v / norm
+    };
+    let b1 = normalize(a1);
+    let proj = (b1.clone() * a2.clone()).sum_dim(1);
+    let b2 = normalize(a2 - b1.clone() * proj);
+    let b3 = cross(b1.clone(), b2.clone());
+    Tensor::stack::<3>(vec![b1, b2, b3], 1).reshape([n, 3, 3])
+}
+
+fn cross(a: Tensor<2>, b: Tensor<2>) -> Tensor<2> {
+    let c = |t: &Tensor<2>, i: usize| t.clone().narrow(1, i, 1);
+    Tensor::cat(
+        vec![
+            c(&a, 1) * c(&b, 2) - c(&a, 2) * c(&b, 1),
+            c(&a, 2) * c(&b, 0) - c(&a, 0) * c(&b, 2),
+            c(&a, 0) * c(&b, 1) - c(&a, 1) * c(&b, 0),
+        ],
+        1,
+    )
+}
+
+/// A skeleton as FK needs it: parent of each joint (topological order, root first) and
+/// parent-relative rest offsets in metres.
+#[derive(Clone, Debug)]
+pub struct FkSkeleton {
+    pub parents: Vec<Option<usize>>,
+    pub offsets: Vec<[f64; 3]>,
+}
+
+impl FkSkeleton {
+    /// The SMPL 24-joint body of `dancegen-motion` (EDGE's offsets, anchors C.4).
+    pub fn smpl24() -> Self {
+        let s = dancegen_motion::skeleton::Skeleton::smpl24();
+        FkSkeleton {
+            parents: s.parents().to_vec(),
+            offsets: s.offsets().to_vec(),
+        }
+    }
+}
+
+/// World joint positions `[N, J, 3]` from local rotation matrices `[N, J, 3, 3]` (column-vector
+/// convention, parent-relative) and root positions `[N, 3]`.
+pub fn forward_kinematics(
+    rotations: Tensor<4>,
+    root: Tensor<2>,
+    skeleton: &FkSkeleton,
+) -> Tensor<3> {
+    let [n, j, _, _] = rotations.dims();
+    assert_eq!(j, skeleton.parents.len(), "FK: joint count");
+    let device = rotations.device();
+    let mut world_rot: Vec<Tensor<3>> = Vec::with_capacity(j);
+    let mut world_pos: Vec<Tensor<2>> = Vec::with_capacity(j);
+    for k in 0..j {
+        let local = rotations.clone().narrow(1, k, 1).reshape([n, 3, 3]);
+        match skeleton.parents[k] {
+            None => {
+                world_rot.push(local);
+                world_pos.push(root.clone());
+            }
+            Some(p) => {
+                let o = skeleton.offsets[k];
+                let off = Tensor::<1>::from_data(
+                    TensorData::new(vec![o[0] as f32, o[1] as f32, o[2] as f32], [3]),
+                    &device,
+                )
+                .reshape([1, 3, 1]);
+                let moved = world_rot[p].clone().matmul(off.expand([n, 3, 1]));
+                world_pos.push(world_pos[p].clone() + moved.reshape([n, 3]));
+                world_rot.push(world_rot[p].clone().matmul(local));
+            }
+        }
+    }
+    Tensor::stack::<3>(world_pos, 1)
+}
+
+/// EDGE's foot loss: the squared velocity of foot joints `[B, T, F, 3]` on frames where the
+/// predicted contact `[B, T, F]` is above `threshold` (0.95 in EDGE), averaged over all entries.
+pub fn foot_contact(feet: Tensor<4>, contact: Tensor<3>, threshold: f64) -> Tensor<1> {
+    let [b, t, f, _] = feet.dims();
+    let vel = feet.clone().narrow(1, 1, t - 1) - feet.narrow(1, 0, t - 1);
+    let on = contact
+        .narrow(1, 0, t - 1)
+        .greater_elem(threshold)
+        .float()
+        .reshape([b, t - 1, f, 1]);
+    (vel * on).powf_scalar(2.0).mean()
+}
+
+/// VQ commitment loss `mean((z_e − sg(z_q))²)`.
+pub fn commitment<const D: usize>(encoded: Tensor<D>, quantized: Tensor<D>) -> Tensor<1> {
+    (encoded - quantized.detach()).powf_scalar(2.0).mean()
+}
+
+/// Symmetric InfoNCE of paired embeddings `a`, `b` `[N, d]` (row `i` of each is a positive
+/// pair): cross-entropy of the cosine-similarity logits `/ temperature` in both directions.
+pub fn info_nce(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<1> {
+    let n = a.dims()[0];
+    let norm = |v: Tensor<2>| {
+        let l = v
+            .clone()
+            .powf_scalar(2.0)
+            .sum_dim(1)
+            .sqrt()
+            .clamp_min(1e-12);
+        v / l
+    };
+    let logits = norm(a).matmul(norm(b).transpose()) / temperature;
+    let device: Device = logits.device();
+    let diag = Tensor::<1, Int>::arange(0..n as i64, &device).reshape([n, 1]);
+    let ce = |l: Tensor<2>| -> Tensor<1> { log_softmax(l, 1).gather(1, diag.clone()).mean().neg() };
+    (ce(logits.clone()) + ce(logits.transpose())) / 2.0
+}
+
+/// Hinge loss of the discriminator: `mean(relu(1 − D(real))) + mean(relu(1 + D(fake)))`.
+pub fn hinge_discriminator(real: Tensor<2>, fake: Tensor<2>) -> Tensor<1> {
+    relu(real.neg() + 1.0).mean() + relu(fake + 1.0).mean()
+}
+
+/// Hinge loss of the generator: `−mean(D(fake))`.
+pub fn hinge_generator(fake: Tensor<2>) -> Tensor<1> {
+    fake.mean().neg()
+}

@@ -1,0 +1,173 @@
+//! Positional encodings.
+//!
+//! - [`sinusoidal`]: the Transformer table, `pe[p, 2i] = sin(p·ω_i)`, `pe[p, 2i+1] = cos(p·ω_i)`,
+//!   `ω_i = 10000^(−2i/d)` (EDGE/Lodge `PositionalEncoding`, TCDiff++ temporal PE).
+//! - [`Rotary`]: rotary position embedding as EDGE uses it (`rotary-embedding-torch`,
+//!   `RotaryEmbedding(dim = latent_dim)` applied to the full-width query/key input before the
+//!   projections): frequencies `θ^(−2i/d)`, each frequency repeated for an **interleaved** pair
+//!   of channels `(2i, 2i+1)`, rotation `x·cos + rotate_half(x)·sin` with
+//!   `rotate_half(a, b) = (−b, a)` per pair.
+//! - [`phase_aligned`]: ReactDance's Blocked-Local-Context encoding, the phase `φ = (p mod T)/T`
+//!   restarting every block of `T` frames: `[sin(π·k·φ), cos(π·k·φ)]` for `k = 1 … d/2`. The
+//!   paper writes the `k = 1` pair (`sin(π(i mod T)/T) ⊕ cos(π(i mod T)/T)`); higher `k` extend
+//!   it to `d` channels (our choice, the code is unreleased).
+//! - [`LearnedPositions`]: a learned table (GPT block positions).
+//! - [`DancerIdentity`]: TCDiff++'s dancer positioning embedding: a sinusoidal code of each
+//!   dancer's slot (out of `max_dancers`) added to the temporal encoding of its frames.
+
+use burn::config::Config;
+use burn::module::{Module, Param};
+use burn::tensor::{Device, Distribution, Tensor, TensorData};
+
+/// `[positions, d]` sinusoidal table for positions `start .. start + positions`.
+pub fn sinusoidal(start: usize, positions: usize, d: usize, device: &Device) -> Tensor<2> {
+    let mut data = vec![0f32; positions * d];
+    for p in 0..positions {
+        let pos = (start + p) as f64;
+        for i in 0..d.div_ceil(2) {
+            let w = (-(2.0 * i as f64) * (10000f64).ln() / d as f64).exp();
+            data[p * d + 2 * i] = (pos * w).sin() as f32;
+            if 2 * i + 1 < d {
+                data[p * d + 2 * i + 1] = (pos * w).cos() as f32;
+            }
+        }
+    }
+    Tensor::from_data(TensorData::new(data, [positions, d]), device)
+}
+
+/// `[positions, d]` phase-aligned table of frames `start ..` with blocks of `block` frames.
+pub fn phase_aligned(
+    start: usize,
+    positions: usize,
+    block: usize,
+    d: usize,
+    device: &Device,
+) -> Tensor<2> {
+    assert!(
+        block > 0 && d % 2 == 0,
+        "phase-aligned PE: block > 0, even d"
+    );
+    let mut data = vec![0f32; positions * d];
+    for p in 0..positions {
+        let phase = ((start + p) % block) as f64 / block as f64;
+        for k in 0..d / 2 {
+            let a = std::f64::consts::PI * (k + 1) as f64 * phase;
+            data[p * d + 2 * k] = a.sin() as f32;
+            data[p * d + 2 * k + 1] = a.cos() as f32;
+        }
+    }
+    Tensor::from_data(TensorData::new(data, [positions, d]), device)
+}
+
+/// Rotary position embedding over the last dimension of `[B, T, d]` inputs.
+#[derive(Clone, Debug)]
+pub struct Rotary {
+    pub dim: usize,
+    pub theta: f64,
+}
+
+impl Rotary {
+    /// EDGE: `RotaryEmbedding(dim = latent_dim)`, θ = 10000.
+    pub fn new(dim: usize) -> Self {
+        assert!(dim % 2 == 0, "rotary dim must be even");
+        Self {
+            dim,
+            theta: 10000.0,
+        }
+    }
+
+    /// `(cos, sin)` tables `[T, d]` for positions `start .. start + t`, pairs interleaved.
+    fn tables(&self, start: usize, t: usize, device: &Device) -> (Tensor<2>, Tensor<2>) {
+        let d = self.dim;
+        let mut c = vec![0f32; t * d];
+        let mut s = vec![0f32; t * d];
+        for p in 0..t {
+            for i in 0..d / 2 {
+                let f = self.theta.powf(-(2.0 * i as f64) / d as f64);
+                let a = (start + p) as f64 * f;
+                for k in 0..2 {
+                    c[p * d + 2 * i + k] = a.cos() as f32;
+                    s[p * d + 2 * i + k] = a.sin() as f32;
+                }
+            }
+        }
+        (
+            Tensor::from_data(TensorData::new(c, [t, d]), device),
+            Tensor::from_data(TensorData::new(s, [t, d]), device),
+        )
+    }
+
+    /// Rotates `x` `[B, T, d]` whose frames sit at positions `start ..`.
+    pub fn rotate(&self, x: Tensor<3>, start: usize) -> Tensor<3> {
+        let [b, t, d] = x.dims();
+        assert_eq!(d, self.dim, "rotary width");
+        let (cos, sin) = self.tables(start, t, &x.device());
+        let pairs = x.clone().reshape([b, t, d / 2, 2]);
+        let first = pairs.clone().narrow(3, 0, 1);
+        let second = pairs.narrow(3, 1, 1);
+        let half = Tensor::cat(vec![second.neg(), first], 3).reshape([b, t, d]);
+        x * cos.unsqueeze::<3>() + half * sin.unsqueeze::<3>()
+    }
+}
+
+/// Configuration of [`LearnedPositions`].
+#[derive(Config, Debug)]
+pub struct LearnedPositionsConfig {
+    pub max_positions: usize,
+    pub d: usize,
+}
+
+/// A learned `[max_positions, d]` position table (normal init, σ = 0.02 as GPT-2).
+#[derive(Module, Debug)]
+pub struct LearnedPositions {
+    pub weight: Param<Tensor<2>>,
+}
+
+impl LearnedPositionsConfig {
+    pub fn init(&self, device: &Device) -> LearnedPositions {
+        LearnedPositions {
+            weight: Param::from_tensor(Tensor::random(
+                [self.max_positions, self.d],
+                Distribution::Normal(0.0, 0.02),
+                device,
+            )),
+        }
+    }
+}
+
+impl LearnedPositions {
+    /// Rows `start .. start + t` as `[1, t, d]`.
+    pub fn forward(&self, start: usize, t: usize) -> Tensor<3> {
+        let [max, _] = self.weight.dims();
+        assert!(
+            start + t <= max,
+            "positions {start}..{} exceed the table of {max}",
+            start + t
+        );
+        self.weight.val().narrow(0, start, t).unsqueeze()
+    }
+}
+
+/// TCDiff++ dancer positioning embedding: per dancer slot, a sinusoidal identity code
+/// (`sinusoidal` row of the slot index, scaled by `identity_scale`) added to the sinusoidal
+/// temporal code of each frame. Output `[dancers · frames, d]`, dancer-major (dancer 0's frames
+/// first), matching the sequence layout TCDiff++ uses.
+pub fn dancer_positions(
+    slots: &[usize],
+    frames: usize,
+    d: usize,
+    max_dancers: usize,
+    device: &Device,
+) -> Tensor<2> {
+    assert!(
+        slots.iter().all(|&s| s < max_dancers),
+        "dancer slot out of range"
+    );
+    let time = sinusoidal(0, frames, d, device);
+    let ids = sinusoidal(0, max_dancers, d, device);
+    let rows: Vec<Tensor<2>> = slots
+        .iter()
+        .map(|&s| time.clone() + ids.clone().narrow(0, s, 1))
+        .collect();
+    Tensor::cat(rows, 0)
+}

@@ -1,0 +1,1 @@
+//! Selective state-space layer (Mamba v1), TCDiff++ sequence decoder.
