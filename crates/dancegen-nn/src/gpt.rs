@@ -211,7 +211,12 @@ impl Gpt {
 fn pick(logits: Tensor<2>, opts: &SamplingOptions, rng: &mut SplitMix64) -> Vec<i64> {
     let [b, v] = logits.dims();
     if opts.greedy {
-        let idx: Vec<i64> = logits.argmax(1).into_data().try_into_vec::<i64>().unwrap();
+        let idx: Vec<i64> = logits
+            .argmax(1)
+            .into_data()
+            .convert::<i64>()
+            .try_into_vec::<i64>()
+            .unwrap();
         return idx;
     }
     let probs: Vec<f32> = softmax(logits / opts.temperature.max(1e-6), 1)
