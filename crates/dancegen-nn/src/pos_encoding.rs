@@ -76,8 +76,9 @@ impl Rotary {
         }
     }
 
-    /// `(cos, sin)` tables `[T, d]` for positions `start .. start + t`, pairs interleaved.
-    fn tables(&self, start: usize, t: usize, device: &Device) -> (Tensor<2>, Tensor<2>) {
+    /// The `(cos, sin)` tables for frames at positions `start .. start + t`, computed once per
+    /// forward pass and shared by every layer.
+    pub fn tables(&self, start: usize, t: usize, device: &Device) -> RotaryTables {
         let d = self.dim;
         let mut c = vec![0f32; t * d];
         let mut s = vec![0f32; t * d];
@@ -91,22 +92,40 @@ impl Rotary {
                 }
             }
         }
-        (
-            Tensor::from_data(TensorData::new(c, [t, d]), device),
-            Tensor::from_data(TensorData::new(s, [t, d]), device),
-        )
+        RotaryTables {
+            cos: Tensor::<2>::from_data(TensorData::new(c, [t, d]), device).unsqueeze(),
+            sin: Tensor::<2>::from_data(TensorData::new(s, [t, d]), device).unsqueeze(),
+        }
     }
 
     /// Rotates `x` `[B, T, d]` whose frames sit at positions `start ..`.
     pub fn rotate(&self, x: Tensor<3>, start: usize) -> Tensor<3> {
+        let t = x.dims()[1];
+        self.tables(start, t, &x.device()).rotate(x)
+    }
+}
+
+/// Precomputed rotary tables `[1, T, d]` (pairs interleaved).
+#[derive(Clone, Debug)]
+pub struct RotaryTables {
+    pub cos: Tensor<3>,
+    pub sin: Tensor<3>,
+}
+
+impl RotaryTables {
+    /// `x·cos + rotate_half(x)·sin` for `x` `[B, T, d]`.
+    pub fn rotate(&self, x: Tensor<3>) -> Tensor<3> {
         let [b, t, d] = x.dims();
-        assert_eq!(d, self.dim, "rotary width");
-        let (cos, sin) = self.tables(start, t, &x.device());
+        assert_eq!(
+            [t, d],
+            [self.cos.dims()[1], self.cos.dims()[2]],
+            "rotary tables vs input [T, d]"
+        );
         let pairs = x.clone().reshape([b, t, d / 2, 2]);
         let first = pairs.clone().narrow(3, 0, 1);
         let second = pairs.narrow(3, 1, 1);
         let half = Tensor::cat(vec![second.neg(), first], 3).reshape([b, t, d]);
-        x * cos.unsqueeze::<3>() + half * sin.unsqueeze::<3>()
+        x * self.cos.clone() + half * self.sin.clone()
     }
 }
 

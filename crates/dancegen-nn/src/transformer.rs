@@ -18,7 +18,7 @@ use burn::tensor::{Device, Tensor};
 use crate::attention::{AttnMasks, MultiHeadAttention, MultiHeadAttentionConfig};
 use crate::film::{Film, FilmConfig};
 use crate::mlp::{Activation, Mlp, MlpConfig};
-use crate::pos_encoding::Rotary;
+use crate::pos_encoding::RotaryTables;
 
 /// PyTorch's LayerNorm epsilon.
 pub const LAYER_NORM_EPS: f64 = 1e-5;
@@ -74,9 +74,15 @@ impl EncoderLayerConfig {
 }
 
 impl EncoderLayer {
-    pub fn forward(&self, x: Tensor<3>, masks: &AttnMasks, rotary: Option<&Rotary>) -> Tensor<3> {
+    /// `rotary`: tables for the frames of `x` (EDGE's music encoder), or `None`.
+    pub fn forward(
+        &self,
+        x: Tensor<3>,
+        masks: &AttnMasks,
+        rotary: Option<&RotaryTables>,
+    ) -> Tensor<3> {
         let sa = |h: Tensor<3>| {
-            let qk = rotary.map_or(h.clone(), |r| r.rotate(h.clone(), 0));
+            let qk = rotary.map_or(h.clone(), |r| r.rotate(h.clone()));
             self.dropout1
                 .forward(self.self_attn.forward(qk.clone(), qk, h, masks))
         };
@@ -159,16 +165,14 @@ pub struct DecoderContext<'a> {
     pub cond: Tensor<2>,
     pub self_masks: &'a AttnMasks,
     pub cross_masks: &'a AttnMasks,
-    /// Rotary on the self-attention query/key input (EDGE), with the frames' first position.
-    pub rotary: Option<(&'a Rotary, usize)>,
+    /// Rotary tables for the self-attention query/key input (EDGE), `[1, T, d_model]`.
+    pub rotary: Option<&'a RotaryTables>,
 }
 
 impl FilmDecoderLayer {
     pub fn forward(&self, x: Tensor<3>, ctx: &DecoderContext) -> Tensor<3> {
         let h = self.norm1.forward(x.clone());
-        let qk = ctx
-            .rotary
-            .map_or(h.clone(), |(r, start)| r.rotate(h.clone(), start));
+        let qk = ctx.rotary.map_or(h.clone(), |r| r.rotate(h.clone()));
         let sa = self
             .dropout1
             .forward(self.self_attn.forward(qk.clone(), qk, h, ctx.self_masks));

@@ -117,7 +117,7 @@ fn film_decoder_layer_matches_edge_formula() {
     let layer = weights::load(layer, &fx.weights_path(), Layout::PyTorch).unwrap();
     let x = fx.tensor::<3>("in.x", &dev).require_grad();
     let t = x.dims()[1];
-    let rotary = Rotary::new(fx.cfg_usize("d_model"));
+    let rotary = Rotary::new(fx.cfg_usize("d_model")).tables(fx.cfg_usize("rotary_start"), t, &dev);
     let self_masks = AttnMasks {
         attn: AttnMask::BlockDiagonal {
             block: fx.cfg_usize("block"),
@@ -130,7 +130,7 @@ fn film_decoder_layer_matches_edge_formula() {
         cond: fx.tensor("in.cond", &dev),
         self_masks: &self_masks,
         cross_masks: &AttnMasks::default(),
-        rotary: Some((&rotary, fx.cfg_usize("rotary_start"))),
+        rotary: Some(&rotary),
     };
     let y = layer.forward(x.clone(), &ctx);
     let grads = (y.clone() * fx.tensor::<3>("in.probe", &dev))
