@@ -190,3 +190,62 @@ pub fn dancer_positions(
         .collect();
     Tensor::cat(rows, 0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rows(t: Tensor<2>) -> Vec<Vec<f32>> {
+        let [n, d] = t.dims();
+        let v: Vec<f32> = t.into_data().try_into_vec::<f32>().unwrap();
+        (0..n).map(|i| v[i * d..(i + 1) * d].to_vec()).collect()
+    }
+
+    #[test]
+    fn phase_aligned_restarts_every_block() {
+        let dev = crate::device::inference();
+        let r = rows(phase_aligned(0, 12, 4, 6, &dev));
+        for p in 0..12 {
+            assert_eq!(r[p], r[p % 4], "frame {p} must equal frame {}", p % 4);
+        }
+        // The paper's pair: sin(π φ), cos(π φ) with φ = (p mod T)/T.
+        let phi = 3.0 / 4.0 * std::f64::consts::PI;
+        assert!((f64::from(r[3][0]) - phi.sin()).abs() < 1e-6);
+        assert!((f64::from(r[3][1]) - phi.cos()).abs() < 1e-6);
+        // A block start offset continues the phase.
+        assert_eq!(rows(phase_aligned(5, 1, 4, 6, &dev))[0], r[1]);
+    }
+
+    #[test]
+    fn dancer_positions_share_time_and_differ_by_identity() {
+        let dev = crate::device::inference();
+        let t = dancer_positions(&[3, 0], 5, 8, 5, &dev);
+        assert_eq!(t.dims(), [10, 8]);
+        let r = rows(t);
+        let time = rows(sinusoidal(0, 5, 8, &dev));
+        let ids = rows(sinusoidal(0, 5, 8, &dev));
+        for f in 0..5 {
+            for c in 0..8 {
+                assert!((r[f][c] - (time[f][c] + ids[3][c])).abs() < 1e-6);
+                assert!((r[5 + f][c] - (time[f][c] + ids[0][c])).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn rotary_preserves_norms_and_relative_angles() {
+        let dev = crate::device::inference();
+        let rot = Rotary::new(8);
+        let x = Tensor::<3>::random([1, 6, 8], Distribution::Normal(0.0, 1.0), &dev);
+        let y = rot.rotate(x.clone(), 0);
+        let n = |t: Tensor<3>| t.powf_scalar(2.0).sum().into_scalar::<f32>();
+        assert!((n(x.clone()) - n(y)).abs() < 1e-4);
+        // q·k depends only on the position difference: shift both by 3 frames.
+        let q = x.clone().narrow(1, 0, 1);
+        let k = x.narrow(1, 1, 1);
+        let dot = |a: Tensor<3>, b: Tensor<3>| (a * b).sum().into_scalar::<f32>();
+        let d0 = dot(rot.rotate(q.clone(), 2), rot.rotate(k.clone(), 4));
+        let d1 = dot(rot.rotate(q, 5), rot.rotate(k, 7));
+        assert!((d0 - d1).abs() < 1e-4, "{d0} vs {d1}");
+    }
+}
