@@ -47,7 +47,7 @@ pub struct MultiHeadAttention {
 impl MultiHeadAttentionConfig {
     pub fn init(&self, device: &burn::tensor::Device) -> MultiHeadAttention {
         assert!(
-            self.n_heads > 0 && self.d_model % self.n_heads == 0,
+            self.n_heads > 0 && self.d_model.is_multiple_of(self.n_heads),
             "d_model {} is not divisible by n_heads {}",
             self.d_model,
             self.n_heads

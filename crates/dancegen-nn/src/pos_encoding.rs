@@ -44,7 +44,7 @@ pub fn phase_aligned(
     device: &Device,
 ) -> Tensor<2> {
     assert!(
-        block > 0 && d % 2 == 0,
+        block > 0 && d.is_multiple_of(2),
         "phase-aligned PE: block > 0, even d"
     );
     let mut data = vec![0f32; positions * d];
@@ -69,7 +69,7 @@ pub struct Rotary {
 impl Rotary {
     /// EDGE: `RotaryEmbedding(dim = latent_dim)`, θ = 10000.
     pub fn new(dim: usize) -> Self {
-        assert!(dim % 2 == 0, "rotary dim must be even");
+        assert!(dim.is_multiple_of(2), "rotary dim must be even");
         Self {
             dim,
             theta: 10000.0,

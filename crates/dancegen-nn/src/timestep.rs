@@ -12,7 +12,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 /// `[B, d]` sinusoidal embedding of (possibly fractional) timesteps.
 pub fn sinusoidal_timestep(t: &[f32], d: usize, device: &Device) -> Tensor<2> {
     assert!(
-        d % 2 == 0 && d >= 4,
+        d.is_multiple_of(2) && d >= 4,
         "timestep embedding width must be even and ≥ 4"
     );
     let half = d / 2;
