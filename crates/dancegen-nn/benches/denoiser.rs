@@ -3,9 +3,12 @@
 //!
 //! Model (EDGE, anchors D.1): Linear 151 → 512, 8 FiLM decoder layers (d 512, 8 heads, FF 1024,
 //! GELU, rotary on the self-attention query/key input), cross-attention to 150 music tokens of
-//! width 512, Linear 512 → 151. Cases: forward at batch 1 and 8; one training step (forward,
-//! MSE, backward, AdamW) at batch 1 and 8. Each case: warm-up, then `DANCEGEN_BENCH_REPS`
-//! (default 5) timed runs; prints one JSON line per case with the median and min in ms.
+//! width 512, Linear 512 → 151; the FiLM vector is the conditioning vector plus the timestep
+//! embedding (sinusoidal → Linear 512 → 2048 → Mish → Linear 2048 → 512). Cases: forward at
+//! batch 1 and 8; one training step (forward, MSE, backward, AdamW) at batch 1 and 8; EDGE's
+//! sampler on 150 frames at batch 1 (DDIM 50 steps, eta 1, guidance w = 2: two forwards per
+//! step). Each case: warm-up, then `DANCEGEN_BENCH_REPS` (default 5) timed runs; prints one JSON
+//! line per case with the median and min in ms.
 
 use std::time::Instant;
 
@@ -13,9 +16,14 @@ use dancegen_nn::attention::AttnMasks;
 use dancegen_nn::burn::module::Module;
 use dancegen_nn::burn::nn::{Linear, LinearConfig};
 use dancegen_nn::burn::optim::{AdamWConfig, GradientsParams};
+use dancegen_nn::burn::tensor::Int;
 use dancegen_nn::burn::tensor::{Device, Distribution, Tensor};
 use dancegen_nn::device;
+use dancegen_nn::diffusion::{
+    Conditioning, Denoiser as DenoiserTrait, SampleOptions, Schedule, sample,
+};
 use dancegen_nn::pos_encoding::{Rotary, RotaryTables};
+use dancegen_nn::timestep::{TimestepMlp, TimestepMlpConfig};
 use dancegen_nn::transformer::{DecoderContext, FilmDecoderLayer, FilmDecoderLayerConfig};
 
 const FRAMES: usize = 150;
@@ -24,6 +32,8 @@ const D: usize = 512;
 
 #[derive(Module, Debug)]
 struct Denoiser {
+    time: TimestepMlp,
+    time_cond: Linear,
     input: Linear,
     layers: Vec<FilmDecoderLayer>,
     output: Linear,
@@ -32,6 +42,8 @@ struct Denoiser {
 impl Denoiser {
     fn new(device: &Device) -> Self {
         Denoiser {
+            time: TimestepMlpConfig::new(D).init(device),
+            time_cond: LinearConfig::new(4 * D, D).init(device),
             input: LinearConfig::new(D_MOTION, D).init(device),
             layers: (0..8)
                 .map(|_| FilmDecoderLayerConfig::new(D, 8, 1024).init(device))
@@ -43,10 +55,12 @@ impl Denoiser {
     fn forward(
         &self,
         x: Tensor<3>,
+        t: &[f32],
         memory: Tensor<3>,
         cond: Tensor<2>,
         rotary: &RotaryTables,
     ) -> Tensor<3> {
+        let cond = cond + self.time_cond.forward(self.time.forward(t, &x.device()));
         let none = AttnMasks::default();
         let ctx = DecoderContext {
             memory,
@@ -60,6 +74,46 @@ impl Denoiser {
             h = l.forward(h, &ctx);
         }
         self.output.forward(h)
+    }
+}
+
+/// The music condition of the sampler case.
+struct Music {
+    memory: Tensor<3>,
+    cond: Tensor<2>,
+}
+
+/// The denoiser as the sampler sees it. The null condition is zeros (a stand-in for EDGE's
+/// learned null embedding at the same cost).
+struct Sampling<'a> {
+    net: &'a Denoiser,
+    rotary: &'a RotaryTables,
+}
+
+impl DenoiserTrait for Sampling<'_> {
+    type Cond = Music;
+
+    fn predict_x0(
+        &self,
+        x_t: Tensor<3>,
+        t: Tensor<1, Int>,
+        c: Conditioning<'_, Music>,
+    ) -> Tensor<3> {
+        let t: Vec<f32> = t
+            .into_data()
+            .convert::<f32>()
+            .try_into_vec::<f32>()
+            .unwrap();
+        let b = x_t.dims()[0];
+        let dev = x_t.device();
+        let (memory, cond) = match c {
+            Conditioning::Full(m) => (m.memory.clone(), m.cond.clone()),
+            _ => (
+                Tensor::zeros([b, FRAMES, D], &dev),
+                Tensor::zeros([b, D], &dev),
+            ),
+        };
+        self.net.forward(x_t, &t, memory, cond, self.rotary)
     }
 }
 
@@ -106,10 +160,31 @@ fn main() {
         if want(&case) {
             let (x, m, c) = inputs(b, &dev);
             time(&case, reps, || {
-                let y = model.forward(x.clone(), m.clone(), c.clone(), &rotary);
+                let y = model.forward(x.clone(), &[500.0; 8][..b], m.clone(), c.clone(), &rotary);
                 let _ = y.into_data();
             });
         }
+    }
+
+    if want("ddim50_b1") {
+        let (_, memory, cond) = inputs(1, &dev);
+        let music = Music { memory, cond };
+        let schedule = Schedule::edge();
+        let sampler = Sampling {
+            net: &model,
+            rotary: &rotary,
+        };
+        time("ddim50_b1", reps.min(3), || {
+            let x = sample(
+                &sampler,
+                &schedule,
+                [1, FRAMES, D_MOTION],
+                Some(&music),
+                &SampleOptions::edge(0),
+                &dev,
+            );
+            let _ = x.into_data();
+        });
     }
 
     let tdev = device::training();
@@ -127,7 +202,7 @@ fn main() {
             Tensor::<3>::random([b, FRAMES, D_MOTION], Distribution::Normal(0.0, 1.0), &tdev);
         time(&case, reps, || {
             let net = model.take().unwrap();
-            let y = net.forward(x.clone(), m.clone(), c.clone(), &rotary);
+            let y = net.forward(x.clone(), &[500.0; 8][..b], m.clone(), c.clone(), &rotary);
             let loss = (y - target.clone()).powf_scalar(2.0).mean();
             let grads = GradientsParams::from_grads(loss.backward(), &net);
             model = Some(optim.step(1e-4, net, grads));
