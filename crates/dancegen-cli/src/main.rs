@@ -5,6 +5,7 @@ mod cmd_beats;
 mod cmd_convert;
 mod cmd_features;
 mod cmd_render;
+mod cmd_train;
 mod demo;
 mod eval;
 mod plot;
@@ -27,6 +28,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Convert(args) => cmd_convert::run(args, cli.quiet),
         cli::Command::Render(args) => cmd_render::run(args, cli.quiet),
         cli::Command::Eval(args) => eval::run(args, cli.quiet),
+        cli::Command::Train(args) => cmd_train::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

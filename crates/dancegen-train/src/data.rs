@@ -1,0 +1,451 @@
+//! Windowed motion (+ optional music features) for training.
+//!
+//! Every motion file is read with `dancegen_motion::formats::load_motion_file` (BVH retargeted
+//! to SMPL 24, group files split per dancer), resampled to the configured frame rate and
+//! encoded to the configured representation: one clip of `(T, dims)` per dancer. Windows of
+//! `window` frames start every `stride` frames (EDGE: 150 / 15 at 30 fps, `data/slice.py`;
+//! ReactDance's dense sliding windows: stride 1–4); clips shorter than a window are skipped.
+//!
+//! Order: window `i` of epoch `e` is `perm_e[i]`, with `perm_e` a Fisher–Yates shuffle driven by
+//! SplitMix64 seeded from `(seed, e)`; the last partial batch of an epoch is dropped (EDGE's
+//! `drop_last=True`). The data position is therefore `(epoch, cursor)` and nothing else.
+
+use std::path::{Path, PathBuf};
+
+use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_motion::repr::{Edge151, HumanMl263, Lodge139, MinMaxNormalizer, SmplMotion};
+use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
+use serde::{Deserialize, Serialize};
+
+use crate::TrainError;
+use crate::config::{DataConfig, NormalizerKind, Representation};
+
+/// File extensions read from a directory in `[data] paths`.
+pub const MOTION_EXTENSIONS: [&str; 4] = ["bvh", "pkl", "npz", "npy"];
+
+/// One dancer's encoded motion.
+#[derive(Clone, Debug)]
+pub struct Clip {
+    pub source: PathBuf,
+    pub frames: usize,
+    /// `(frames, dims)`, raw (not normalised).
+    pub motion: Vec<f32>,
+    /// `(frames, music dims)`.
+    pub music: Option<Vec<f32>>,
+}
+
+/// A batch on the training device.
+#[derive(Clone, Debug)]
+pub struct Batch {
+    /// `[batch, window, dims]`, normalised.
+    pub motion: Tensor<3>,
+    /// `[batch, window, music dims]`.
+    pub music: Option<Tensor<3>>,
+}
+
+/// Per-dimension statistics saved with the model (`normalizer.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Normalizer {
+    /// `(x − mean) / std`; std below [`MIN_STD`] is replaced by 1 (constant dims pass through).
+    MeanStd {
+        mean: Vec<f64>,
+        std: Vec<f64>,
+    },
+    /// EDGE / LODGE MinMax(−1, 1) (`dancegen_motion::repr::MinMaxNormalizer`).
+    MinMax(MinMaxNormalizer),
+    None {
+        dims: usize,
+    },
+}
+
+/// Smallest standard deviation used as is (below, the dim is treated as constant).
+pub const MIN_STD: f64 = 1e-6;
+
+impl Normalizer {
+    /// Fits on all frames of all clips (statistics in f64).
+    pub fn fit(kind: NormalizerKind, clips: &[Clip], dims: usize) -> Result<Self, String> {
+        Ok(match kind {
+            NormalizerKind::None => Normalizer::None { dims },
+            NormalizerKind::MinMax => Normalizer::MinMax(
+                MinMaxNormalizer::fit_chunks(clips.iter().map(|c| c.motion.as_slice()), dims)
+                    .map_err(|e| e.to_string())?,
+            ),
+            NormalizerKind::MeanStd => {
+                let mut sum = vec![0f64; dims];
+                let mut sq = vec![0f64; dims];
+                let mut n = 0usize;
+                for row in clips.iter().flat_map(|c| c.motion.chunks_exact(dims)) {
+                    for (d, &v) in row.iter().enumerate() {
+                        sum[d] += v as f64;
+                        sq[d] += v as f64 * v as f64;
+                    }
+                    n += 1;
+                }
+                if n == 0 {
+                    return Err("normalizer fitted on no frames".into());
+                }
+                let mean: Vec<f64> = sum.iter().map(|s| s / n as f64).collect();
+                let std = sq
+                    .iter()
+                    .zip(&mean)
+                    .map(|(s, m)| {
+                        let sd = (s / n as f64 - m * m).max(0.0).sqrt();
+                        if sd < MIN_STD { 1.0 } else { sd }
+                    })
+                    .collect();
+                Normalizer::MeanStd { mean, std }
+            }
+        })
+    }
+
+    pub fn dims(&self) -> usize {
+        match self {
+            Normalizer::MeanStd { mean, .. } => mean.len(),
+            Normalizer::MinMax(m) => m.dims,
+            Normalizer::None { dims } => *dims,
+        }
+    }
+
+    /// Normalises `(N, dims)` rows in place.
+    pub fn transform(&self, x: &mut [f32]) -> Result<(), String> {
+        match self {
+            Normalizer::MeanStd { mean, std } => {
+                for row in x.chunks_exact_mut(mean.len()) {
+                    for ((v, m), s) in row.iter_mut().zip(mean).zip(std) {
+                        *v = ((*v as f64 - m) / s) as f32;
+                    }
+                }
+                Ok(())
+            }
+            Normalizer::MinMax(m) => m.transform(x).map_err(|e| e.to_string()),
+            Normalizer::None { .. } => Ok(()),
+        }
+    }
+
+    /// Undoes [`Normalizer::transform`] in place.
+    pub fn inverse(&self, x: &mut [f32]) -> Result<(), String> {
+        match self {
+            Normalizer::MeanStd { mean, std } => {
+                for row in x.chunks_exact_mut(mean.len()) {
+                    for ((v, m), s) in row.iter_mut().zip(mean).zip(std) {
+                        *v = (*v as f64 * s + m) as f32;
+                    }
+                }
+                Ok(())
+            }
+            Normalizer::MinMax(m) => m.inverse(x).map_err(|e| e.to_string()),
+            Normalizer::None { .. } => Ok(()),
+        }
+    }
+
+    /// Writes the JSON form atomically.
+    pub fn save(&self, path: &Path) -> Result<(), TrainError> {
+        let json = serde_json::to_vec_pretty(self).expect("normalizer serialises");
+        dancegen_io::write_atomic(path, |w| w.write_all(&json)).map_err(|e| TrainError::io(path, e))
+    }
+
+    /// Reads the JSON form.
+    pub fn load(path: &Path) -> Result<Self, TrainError> {
+        let bytes = std::fs::read(path).map_err(|e| TrainError::io(path, e))?;
+        let n: Normalizer = serde_json::from_slice(&bytes).map_err(|e| TrainError::io(path, e))?;
+        let ok = match &n {
+            Normalizer::MeanStd { mean, std } => mean.len() == std.len(),
+            Normalizer::MinMax(m) => m.min.len() == m.dims && m.max.len() == m.dims,
+            Normalizer::None { .. } => true,
+        };
+        if !ok {
+            return Err(TrainError::io(path, "statistics of different lengths"));
+        }
+        Ok(n)
+    }
+}
+
+/// Values per frame of a representation.
+pub fn representation_dims(r: Representation) -> usize {
+    match r {
+        Representation::Edge151 => Edge151::DIMS,
+        Representation::Lodge139 => Lodge139::DIMS,
+        Representation::Humanml263 => 263,
+    }
+}
+
+fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
+    match r {
+        Representation::Edge151 => Edge151::encode(m),
+        Representation::Lodge139 => Lodge139::encode(m),
+        Representation::Humanml263 => HumanMl263::encode(m),
+    }
+    .map_err(|e| e.to_string())
+}
+
+/// The motion files named by `paths` (directories expanded, sorted).
+pub fn motion_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrainError> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let rd = std::fs::read_dir(p).map_err(|e| TrainError::io(p, e))?;
+            let mut files: Vec<PathBuf> = rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                        MOTION_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
+                    })
+                })
+                .collect();
+            files.sort();
+            if files.is_empty() {
+                return Err(TrainError::Data {
+                    path: p.clone(),
+                    reason: format!("no motion files ({})", MOTION_EXTENSIONS.join(", ")),
+                });
+            }
+            out.extend(files);
+        } else {
+            out.push(p.clone());
+        }
+    }
+    Ok(out)
+}
+
+/// Reads and encodes one motion file: one clip per dancer.
+pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> {
+    let data_err = |reason: String| TrainError::Data {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let loaded = load_motion_file(path).map_err(|e| data_err(e.reason))?;
+    let opts = ConvertOptions {
+        fps: Some(c.fps),
+        to_smpl24: matches!(loaded, LoadedMotion::Bvh(_)),
+        ..Default::default()
+    };
+    let dancers = match convert_motion(path, loaded, &opts).map_err(|e| data_err(e.reason))? {
+        LoadedMotion::Smpl(m) => vec![m],
+        LoadedMotion::Group(g) => g,
+        other => {
+            return Err(data_err(format!(
+                "{} has no joint rotations; {:?} needs SMPL rotations",
+                other.kind(),
+                c.representation
+            )));
+        }
+    };
+    let music = match &c.music {
+        Some(m) => Some(load_music(path, &m.dir, m.dims)?),
+        None => None,
+    };
+    let dims = representation_dims(c.representation);
+    let mut clips = Vec::new();
+    for m in &dancers {
+        let mut motion = encode(c.representation, m).map_err(data_err)?;
+        let mut frames = motion.len() / dims;
+        let music = music.as_ref().map(|(feat, t)| {
+            frames = frames.min(*t);
+            feat.clone()
+        });
+        motion.truncate(frames * dims);
+        let music = music.map(|mut f| {
+            f.truncate(frames * c.music.as_ref().map_or(0, |m| m.dims));
+            f
+        });
+        clips.push(Clip {
+            source: path.to_path_buf(),
+            frames,
+            motion,
+            music,
+        });
+    }
+    Ok(clips)
+}
+
+/// `<dir>/<stem>.npy` as `(values, frames)`.
+fn load_music(motion: &Path, dir: &Path, dims: usize) -> Result<(Vec<f32>, usize), TrainError> {
+    let stem = motion.file_stem().unwrap_or_default();
+    let path = dir.join(stem).with_extension("npy");
+    let a = dancegen_io::read_npy(&path).map_err(|e| TrainError::Data {
+        path: path.clone(),
+        reason: format!("music features of {}: {e}", motion.display()),
+    })?;
+    match a.shape.as_slice() {
+        [t, d] if *d == dims => Ok((a.data.iter().map(|&v| v as f32).collect(), *t)),
+        shape => Err(TrainError::Data {
+            path,
+            reason: format!("music features of shape {shape:?}, expected (T, {dims})"),
+        }),
+    }
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a tiny generator whose whole state is one `u64`, so
+/// the data order is reproducible from the seed alone.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(pub u64);
+
+impl SplitMix64 {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `0..n` (Lemire's multiply-shift; the bias is below 2⁻³² for data-set sizes).
+    pub fn below(&mut self, n: usize) -> usize {
+        ((self.next_u64() as u128 * n as u128) >> 64) as usize
+    }
+}
+
+/// Seed of step-`step` randomness or of epoch `e`'s shuffle, derived from the run seed.
+pub fn derive_seed(seed: u64, stream: u64, index: u64) -> u64 {
+    let mut r = SplitMix64(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    r.0 ^= index.wrapping_mul(0x8CB9_2BA7_2F3D_8DD7);
+    r.next_u64()
+}
+
+/// Where the data order stands: the next batch is `perm(epoch)[cursor..cursor + batch]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DataPosition {
+    pub epoch: u64,
+    pub cursor: usize,
+}
+
+/// All windows of all clips, normalised, with a seeded order.
+pub struct WindowDataset {
+    pub clips: Vec<Clip>,
+    /// `(clip, start frame)` of every window.
+    pub windows: Vec<(usize, usize)>,
+    pub dims: usize,
+    pub music_dims: usize,
+    pub window: usize,
+    pub batch_size: usize,
+    pub seed: u64,
+}
+
+/// Stream id of the shuffles in [`derive_seed`].
+const SHUFFLE_STREAM: u64 = 1;
+
+impl WindowDataset {
+    /// Reads every file of `c.paths`; returns the raw clips (fit the normaliser on them, then
+    /// call [`WindowDataset::new`]).
+    pub fn read_clips(c: &DataConfig) -> Result<Vec<Clip>, TrainError> {
+        let mut clips = Vec::new();
+        for f in motion_files(&c.paths)? {
+            clips.extend(load_clips(&f, c)?);
+        }
+        Ok(clips)
+    }
+
+    /// Normalises `clips` and indexes their windows.
+    pub fn new(
+        mut clips: Vec<Clip>,
+        c: &DataConfig,
+        normalizer: &Normalizer,
+        seed: u64,
+    ) -> Result<Self, TrainError> {
+        let dims = representation_dims(c.representation);
+        if normalizer.dims() != dims {
+            return Err(TrainError::Data {
+                path: c.paths[0].clone(),
+                reason: format!(
+                    "the normaliser has {} dims, {:?} has {dims}",
+                    normalizer.dims(),
+                    c.representation
+                ),
+            });
+        }
+        let mut windows = Vec::new();
+        for (i, clip) in clips.iter_mut().enumerate() {
+            normalizer
+                .transform(&mut clip.motion)
+                .map_err(|reason| TrainError::Data {
+                    path: clip.source.clone(),
+                    reason,
+                })?;
+            if clip.frames < c.window {
+                tracing::warn!(
+                    "{}: {} frames, shorter than one {}-frame window; skipped",
+                    clip.source.display(),
+                    clip.frames,
+                    c.window
+                );
+                continue;
+            }
+            windows.extend(
+                (0..=clip.frames - c.window)
+                    .step_by(c.stride)
+                    .map(|s| (i, s)),
+            );
+        }
+        if windows.len() < c.batch_size {
+            return Err(TrainError::Data {
+                path: c.paths[0].clone(),
+                reason: format!(
+                    "{} windows of {} frames, fewer than one batch of {}",
+                    windows.len(),
+                    c.window,
+                    c.batch_size
+                ),
+            });
+        }
+        Ok(Self {
+            clips,
+            windows,
+            dims,
+            music_dims: c.music.as_ref().map_or(0, |m| m.dims),
+            window: c.window,
+            batch_size: c.batch_size,
+            seed,
+        })
+    }
+
+    /// The window order of `epoch`.
+    pub fn permutation(&self, epoch: u64) -> Vec<usize> {
+        let mut rng = SplitMix64(derive_seed(self.seed, SHUFFLE_STREAM, epoch));
+        let mut p: Vec<usize> = (0..self.windows.len()).collect();
+        for i in (1..p.len()).rev() {
+            p.swap(i, rng.below(i + 1));
+        }
+        p
+    }
+
+    /// The window indices of the batch at `pos`, and the position after it.
+    pub fn batch_indices(&self, pos: DataPosition) -> (Vec<usize>, DataPosition) {
+        let mut pos = pos;
+        if pos.cursor + self.batch_size > self.windows.len() {
+            pos = DataPosition {
+                epoch: pos.epoch + 1,
+                cursor: 0,
+            };
+        }
+        let perm = self.permutation(pos.epoch);
+        let idx = perm[pos.cursor..pos.cursor + self.batch_size].to_vec();
+        (
+            idx,
+            DataPosition {
+                epoch: pos.epoch,
+                cursor: pos.cursor + self.batch_size,
+            },
+        )
+    }
+
+    /// The batch at `pos` on `device`, and the position after it.
+    pub fn batch(&self, pos: DataPosition, device: &Device) -> (Batch, DataPosition) {
+        let (idx, next) = self.batch_indices(pos);
+        let (b, w) = (idx.len(), self.window);
+        let mut motion = Vec::with_capacity(b * w * self.dims);
+        let mut music = Vec::with_capacity(b * w * self.music_dims);
+        for &i in &idx {
+            let (c, s) = self.windows[i];
+            let clip = &self.clips[c];
+            motion.extend_from_slice(&clip.motion[s * self.dims..(s + w) * self.dims]);
+            if let Some(m) = &clip.music {
+                music.extend_from_slice(&m[s * self.music_dims..(s + w) * self.music_dims]);
+            }
+        }
+        let motion = Tensor::from_data(TensorData::new(motion, [b, w, self.dims]), device);
+        let music = (self.music_dims > 0)
+            .then(|| Tensor::from_data(TensorData::new(music, [b, w, self.music_dims]), device));
+        (Batch { motion, music }, next)
+    }
+}

@@ -1,0 +1,68 @@
+//! The [`TrainTask`](crate::TrainTask)s `dancegen train` knows, chosen by `[model] kind`.
+
+use std::path::Path;
+
+use crate::data::representation_dims;
+use crate::trainer::{self, RunOptions, RunSummary};
+use crate::{TrainConfig, TrainError, files};
+
+pub mod motion_autoencoder;
+
+pub use motion_autoencoder::MotionAutoencoderTask;
+
+/// Every `[model] kind` with a task.
+pub const KINDS: [&str; 1] = [motion_autoencoder::KIND];
+
+/// Starts a new run of the task `config` names (`config_path` for error messages).
+pub fn train_config(
+    config: &TrainConfig,
+    config_path: &Path,
+    opts: &RunOptions,
+) -> Result<RunSummary, TrainError> {
+    match kind(config, config_path)? {
+        motion_autoencoder::KIND => {
+            trainer::train(&autoencoder(config, config_path)?, config, opts)
+        }
+        _ => unreachable!("kind() only returns known kinds"),
+    }
+}
+
+/// Continues the run in `run_dir`.
+pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, TrainError> {
+    let config = trainer::run_config(run_dir)?;
+    let path = run_dir.join(files::CONFIG);
+    match kind(&config, &path)? {
+        motion_autoencoder::KIND => trainer::resume(&autoencoder(&config, &path)?, run_dir, opts),
+        _ => unreachable!("kind() only returns known kinds"),
+    }
+}
+
+fn kind<'a>(config: &'a TrainConfig, path: &Path) -> Result<&'a str, TrainError> {
+    let err = |reason: String| TrainError::Config {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let k = config.model_kind().map_err(err)?;
+    KINDS
+        .iter()
+        .find(|&&known| known == k)
+        .copied()
+        .ok_or_else(|| {
+            err(format!(
+                "[model] kind {k:?} is not a model this version trains (known: {})",
+                KINDS.join(", ")
+            ))
+        })
+}
+
+fn autoencoder(config: &TrainConfig, path: &Path) -> Result<MotionAutoencoderTask, TrainError> {
+    MotionAutoencoderTask::from_table(
+        config.model_params(),
+        representation_dims(config.data.representation),
+        config.data.window,
+    )
+    .map_err(|reason| TrainError::Config {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
