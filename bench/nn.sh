@@ -36,7 +36,7 @@ rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 cases = sorted({r["case"] for r in rows})
 print(f"{'case':<16}{'pytorch ms':>12}{'burn ms':>12}{'speed vs pytorch':>18}")
 for c in cases:
-    med = lambda impl: statistics.median(r["median_ms"] for r in rows if r["case"] == c and r["impl"] == impl)
+    med = lambda impl: statistics.median([r["median_ms"] for r in rows if r["case"] == c and r["impl"] == impl] or [float("nan")])
     p, b = med("pytorch"), med("burn-flex")
     print(f"{c:<16}{p:>12.1f}{b:>12.1f}{p / b:>17.2f}x")
 PY
