@@ -17,6 +17,7 @@ use crate::attention::{AttnMasks, MultiHeadAttention, MultiHeadAttentionConfig};
 use crate::mask::AttnMask;
 use crate::mlp::{Mlp, MlpConfig};
 use crate::pos_encoding::{LearnedPositions, LearnedPositionsConfig};
+use crate::rng::SplitMix64;
 use crate::transformer::LAYER_NORM_EPS;
 
 /// Configuration of [`Gpt`].
@@ -241,21 +242,4 @@ fn pick(logits: Tensor<2>, opts: &SamplingOptions, rng: &mut SplitMix64) -> Vec<
             *order.last().unwrap() as i64
         })
         .collect()
-}
-
-/// Small deterministic RNG for token sampling (seeded, platform-independent).
-pub(crate) struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
 }

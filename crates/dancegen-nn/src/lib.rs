@@ -28,6 +28,7 @@ pub mod masked;
 pub mod mlp;
 pub mod pos_encoding;
 pub mod quant;
+pub mod rng;
 pub mod ssm;
 pub mod timestep;
 pub mod transformer;

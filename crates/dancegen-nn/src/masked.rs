@@ -20,9 +20,9 @@ use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Int, Tensor, TensorData};
 
 use crate::attention::AttnMasks;
-use crate::gpt::SplitMix64;
 use crate::mlp::Activation;
 use crate::pos_encoding::sinusoidal;
+use crate::rng::SplitMix64;
 use crate::transformer::{EncoderLayer, EncoderLayerConfig};
 
 /// Configuration of [`MaskedTransformer`].

@@ -276,25 +276,8 @@ fn load_music(motion: &Path, dir: &Path, dims: usize) -> Result<(Vec<f32>, usize
     }
 }
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny generator whose whole state is one `u64`, so
-/// the data order is reproducible from the seed alone.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (Lemire's multiply-shift; the bias is below 2⁻³² for data-set sizes).
-    pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() as u128 * n as u128) >> 64) as usize
-    }
-}
+/// The data order's generator: the neural crate's one seeded RNG.
+pub use dancegen_nn::rng::SplitMix64;
 
 /// Seed of step-`step` randomness or of epoch `e`'s shuffle, derived from the run seed.
 pub fn derive_seed(seed: u64, stream: u64, index: u64) -> u64 {

@@ -7,27 +7,25 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 
-/// SplitMix64 (Steele, Lea & Flood 2014): tiny, fast, and good enough for Gaussian noise.
+use crate::rng::SplitMix64;
+
+/// Gaussian noise from the crate's [`SplitMix64`].
 #[derive(Clone, Debug)]
 pub struct SeededNoise {
-    state: u64,
+    rng: SplitMix64,
     spare: Option<f64>,
 }
 
 impl SeededNoise {
     pub fn new(seed: u64) -> Self {
         SeededNoise {
-            state: seed,
+            rng: SplitMix64(seed),
             spare: None,
         }
     }
 
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.rng.next_u64()
     }
 
     /// Uniform in the open interval (0, 1).
