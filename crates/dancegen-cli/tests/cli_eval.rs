@@ -438,3 +438,17 @@ fn mpjpe_pairs_by_file_stem() {
     assert_eq!(j["mpjpe"].as_f64(), Some(0.0));
     assert_eq!(j["per_clip"].as_array().unwrap().len(), 8);
 }
+
+#[test]
+fn empty_group_array_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("empty_scene.npy");
+    dancegen_io::write_npy_f32(&p, &[2, 0, 24, 3], &[]).unwrap();
+    let o = dancegen(&["eval", "--pred", s(&p), "--fps", "30"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("empty_scene.npy") && e.contains("empty group array"),
+        "{e}"
+    );
+}

@@ -96,11 +96,11 @@ fn read_raw(path: &Path) -> Result<Raw> {
         match a.shape.as_slice() {
             [_, j, 3] => return Ok((vec![a.data], *j, None)),
             [n, t, j, 3] => {
-                if *n == 0 {
-                    bail!("group array with 0 dancers");
+                if *n == 0 || *t == 0 || *j == 0 {
+                    bail!("empty group array of shape {:?}", a.shape);
                 }
                 let per = t * j * 3;
-                let dancers = a.data.chunks_exact(per.max(1)).map(<[f64]>::to_vec);
+                let dancers = a.data.chunks_exact(per).map(<[f64]>::to_vec);
                 return Ok((dancers.collect(), *j, None));
             }
             // Other layouts (FineDance (T, 315), EDGE (T, 151)) go through the motion library.
@@ -115,10 +115,8 @@ fn read_raw(path: &Path) -> Result<Raw> {
     let file_fps = (!is_npy).then_some(fps);
     match shape.as_slice() {
         [_, j, 3] => Ok((vec![p], *j, file_fps)),
-        [n, t, j, 3] if *n > 0 => Ok((
-            p.chunks_exact((t * j * 3).max(1))
-                .map(<[f64]>::to_vec)
-                .collect(),
+        [n, t, j, 3] if *n > 0 && *t > 0 && *j > 0 => Ok((
+            p.chunks_exact(t * j * 3).map(<[f64]>::to_vec).collect(),
             *j,
             file_fps,
         )),
