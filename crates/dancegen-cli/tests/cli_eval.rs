@@ -452,3 +452,42 @@ fn empty_group_array_is_named() {
         "{e}"
     );
 }
+
+#[test]
+fn penetration_key_in_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pred, _) = fixture_sets(dir.path());
+    // Selected explicitly: the only metric, per clip and as the set mean.
+    let out = dir.path().join("pen.json");
+    let o = dancegen(&[
+        "eval",
+        "--pred",
+        s(&pred),
+        "--fps",
+        "60",
+        "--metrics",
+        "penetration",
+        "--json",
+        s(&out),
+    ]);
+    ok(&o);
+    let j = read_json(&out);
+    let mean = j["penetration"].as_f64().expect("penetration missing");
+    assert!((0.0..=100.0).contains(&mean), "{mean}");
+    assert!(j.get("fid_k").is_none() && j.get("pfc").is_none(), "{j}");
+    let clips = j["per_clip"].as_array().unwrap();
+    let vals: Vec<f64> = clips
+        .iter()
+        .map(|c| c["penetration"].as_f64().unwrap())
+        .collect();
+    println!("penetration per clip {vals:?}, mean {mean}");
+    assert!(vals.iter().all(|v| (0.0..=100.0).contains(v)));
+    let m = vals.iter().sum::<f64>() / vals.len() as f64;
+    assert!((m - mean).abs() < 1e-12);
+    // Part of the default solo set.
+    let out = dir.path().join("default.json");
+    let o = dancegen(&["eval", "--pred", s(&pred), "--fps", "60", "--json", s(&out)]);
+    ok(&o);
+    let j = read_json(&out);
+    assert_eq!(j["penetration"].as_f64(), Some(mean), "{j}");
+}

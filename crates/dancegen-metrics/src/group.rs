@@ -339,6 +339,10 @@ pub fn group_mmc(dancers: &[&[f64]], music_beats: &[usize]) -> Result<Option<f64
 /// Capsule radii (metres) for [`tif`]. Each SMPL bone (parent → child segment) is a capsule;
 /// two dancers intersect in a frame if any capsule of one overlaps any capsule of the other,
 /// i.e. the segment–segment distance is below the sum of the two radii.
+///
+/// TIF keeps its own bones and radii (one capsule per parent → child bone, coarser than the
+/// self-penetration body of [`dancegen_motion::capsule_body::CAPSULES`]) so its values stay
+/// what they were; the geometry ([`segment_distance_sq`]) is the shared one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CapsuleRadii {
     /// Torso bones (pelvis–hips, spine chain, neck, collars): 0.10 m.
@@ -388,57 +392,9 @@ fn bone_radius(child: usize, r: &CapsuleRadii) -> f64 {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Squared distance between segments `p1–q1` and `p2–q2` (Ericson, Real-Time Collision
-/// Detection §5.1.9).
-pub fn segment_distance_sq(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) -> f64 {
-    const EPS: f64 = 1e-12;
-    let (d1, d2, r) = (sub(q1, p1), sub(q2, p2), sub(p1, p2));
-    let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
-    let (s, t);
-    if a <= EPS && e <= EPS {
-        return dot(r, r);
-    }
-    if a <= EPS {
-        s = 0.0;
-        t = (f / e).clamp(0.0, 1.0);
-    } else {
-        let c = dot(d1, r);
-        if e <= EPS {
-            t = 0.0;
-            s = (-c / a).clamp(0.0, 1.0);
-        } else {
-            let b = dot(d1, d2);
-            let denom = a * e - b * b;
-            let mut s0 = if denom > EPS {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t0 = (b * s0 + f) / e;
-            if t0 < 0.0 {
-                t0 = 0.0;
-                s0 = (-c / a).clamp(0.0, 1.0);
-            } else if t0 > 1.0 {
-                t0 = 1.0;
-                s0 = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            s = s0;
-            t = t0;
-        }
-    }
-    let c1 = [p1[0] + d1[0] * s, p1[1] + d1[1] * s, p1[2] + d1[2] * s];
-    let c2 = [p2[0] + d2[0] * t, p2[1] + d2[1] * t, p2[2] + d2[2] * t];
-    let d = sub(c1, c2);
-    dot(d, d)
-}
+/// Squared distance between two segments: the workspace's one capsule geometry, shared with
+/// the self-penetration body ([`dancegen_motion::capsule_body`]).
+pub use dancegen_motion::capsule_body::segment_distance_sq;
 
 /// Whether dancers `a` and `b` intersect at frame `t` (any bone capsule pair overlaps).
 pub fn bodies_intersect(a: &[f64], b: &[f64], t: usize, radii: &CapsuleRadii) -> bool {

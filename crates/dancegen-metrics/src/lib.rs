@@ -11,6 +11,8 @@
 //!
 //! - [`bas`]: beat alignment in the four published variants; [`pfc`], [`foot_skating`],
 //!   [`foot_skating_duration`], [`mpjpe`]: physical plausibility and reconstruction;
+//!   [`penetration`]: self-penetration of forearms/hands on a capsule body (our approximation
+//!   of Lodge++'s mesh-based ratio);
 //!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
 //!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation.
 //!
@@ -78,6 +80,7 @@ pub mod kinetic;
 pub mod longform;
 pub mod manual;
 pub mod mpjpe;
+pub mod penetration;
 pub mod pfc;
 pub mod protocol;
 

@@ -7,6 +7,7 @@
 pub mod aistpp;
 pub mod bvh;
 pub mod bvh_motion;
+pub mod capsule_body;
 pub mod conventions;
 pub mod fk;
 pub mod formats;

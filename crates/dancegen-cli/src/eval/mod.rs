@@ -7,10 +7,12 @@
 //!   rotation `(x, −z, y)`), `fsr` (LODGE foot-skating ratio), `mpjpe` (against the `--gt` clip of
 //!   the same file stem), `freeze`, `boundary_jerk` (boundaries every 150 frames, EDGE's 5-second
 //!   windows at 30 fps), `fsd` (Duolando foot-skating duration in %, pooled over all clips' frame
-//!   steps as the reference prints it). Over the set: `fid_k`, `fid_g`, `div_k`, `div_g` (Bailando: features
-//!   normalised by the GT statistics; without `--gt`, `div_*` is the diversity of the raw
-//!   features). In a scene every dancer counts as a solo sequence (TCDiff); its per-clip value is
-//!   the mean over its dancers. `pfc` is scaled by 10⁴ as EDGE prints it.
+//!   steps as the reference prints it), `penetration` (percent of forearm/hand samples inside
+//!   another body part, on the capsule body: our approximation of Lodge++'s self-penetration
+//!   ratio, see `dancegen_metrics::penetration`). Over the set: `fid_k`, `fid_g`, `div_k`,
+//!   `div_g` (Bailando: features normalised by the GT statistics; without `--gt`, `div_*` is the
+//!   diversity of the raw features). In a scene every dancer counts as a solo sequence (TCDiff);
+//!   its per-clip value is the mean over its dancers. `pfc` is scaled by 10⁴ as EDGE prints it.
 //! - Group metrics (scenes only, world positions): `gmr` (set, needs `--gt` scenes), `gmc`,
 //!   `tif` (per scene).
 //! - Duet metrics (Duolando, world positions): the follower is the `--pred` clip and its leader
@@ -38,7 +40,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 17] = [
+const METRICS: [&str; 18] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -48,6 +50,7 @@ const METRICS: [&str; 17] = [
     "fsr",
     "fsd",
     "mpjpe",
+    "penetration",
     "gmr",
     "gmc",
     "tif",
@@ -59,12 +62,13 @@ const METRICS: [&str; 17] = [
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 10] = [
+const PER_CLIP: [&str; 11] = [
     "bas",
     "pfc",
     "fsr",
     "fsd",
     "mpjpe",
+    "penetration",
     "freeze",
     "boundary_jerk",
     "gmc",

@@ -70,6 +70,10 @@ pub fn clip_metric(m: &str, p: &Prepared) -> Result<Option<f64>> {
             let r = dancegen_metrics::foot_skating::foot_skating_ratio(&p.joints, 24).ratio();
             r.is_finite().then_some(r)
         }
+        "penetration" => dancegen_metrics::penetration::capsule_penetration_ratio(
+            &p.joints,
+            dancegen_metrics::penetration::DEFAULT_SAMPLES_PER_SEGMENT,
+        )?,
         "freeze" => dancegen_metrics::longform::motion_freezing(&p.joints, p.fps)?,
         "boundary_jerk" => {
             let b: Vec<usize> = (1..)
