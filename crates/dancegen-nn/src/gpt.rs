@@ -170,6 +170,13 @@ impl Gpt {
         self.head.forward(h.narrow(1, tc - 1, t))
     }
 
+    /// Logits `[B, T, vocab]` at every position of an input the caller embedded itself
+    /// `[B, T, d]` (e.g. token embedding + per-step music, as Bailando / Lodge++ condition their
+    /// GPTs): entry `i` predicts what follows position `i`.
+    pub fn forward_embeddings(&self, x: Tensor<3>) -> Tensor<3> {
+        self.head.forward(self.run(x, 0, None))
+    }
+
     /// Samples `n` tokens `[B, n]` after `prefix`, one position per step through a KV cache.
     pub fn generate(&self, prefix: Tensor<3>, n: usize, opts: &SamplingOptions) -> Tensor<2, Int> {
         let [b, tc, _] = prefix.dims();
@@ -208,8 +215,9 @@ impl Gpt {
     }
 }
 
-/// The next token per row of `logits` `[B, V]`.
-fn pick(logits: Tensor<2>, opts: &SamplingOptions, rng: &mut SplitMix64) -> Vec<i64> {
+/// The next token per row of `logits` `[B, V]` (greedy, or top-k / temperature sampling from
+/// `rng`): the picking rule of [`Gpt::generate`], for systems with their own decoding loop.
+pub fn pick(logits: Tensor<2>, opts: &SamplingOptions, rng: &mut SplitMix64) -> Vec<i64> {
     let [b, v] = logits.dims();
     if opts.greedy {
         let idx: Vec<i64> = logits

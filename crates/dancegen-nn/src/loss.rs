@@ -143,13 +143,24 @@ pub fn forward_kinematics(
                     &device,
                 )
                 .reshape([1, 3, 1]);
-                let moved = world_rot[p].clone().matmul(off.expand([n, 3, 1]));
+                let moved = small_matmul(world_rot[p].clone(), off.expand([n, 3, 1]));
                 world_pos.push(world_pos[p].clone() + moved.reshape([n, 3]));
-                world_rot.push(world_rot[p].clone().matmul(local));
+                world_rot.push(small_matmul(world_rot[p].clone(), local));
             }
         }
     }
     Tensor::stack::<3>(world_pos, 1)
+}
+
+/// `a @ b` for batches of tiny matrices `[N, I, K] × [N, K, J]` as broadcast multiply + sum:
+/// a batched GEMM pays a kernel call per 3×3 product, which made FK of a few thousand frames
+/// (and its backward) take seconds.
+fn small_matmul(a: Tensor<3>, b: Tensor<3>) -> Tensor<3> {
+    let [n, i, k] = a.dims();
+    let j = b.dims()[2];
+    (a.reshape([n, i, k, 1]) * b.reshape([n, 1, k, j]))
+        .sum_dim(2)
+        .reshape([n, i, j])
 }
 
 /// EDGE's foot loss: the squared velocity of foot joints `[B, T, F, 3]` on frames where the

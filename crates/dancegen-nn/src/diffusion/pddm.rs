@@ -124,6 +124,37 @@ impl ResidualShift {
         d_t * (ep / e) + x0 * (a / e) + noise * (self.kappa * (ep * a / e).sqrt())
     }
 
+    /// The reverse step from `t` straight to any `s < t` (strided sampling): the posterior (13)
+    /// with `η_{t−1}` replaced by `η_s` and `α_t` by `η_t − η_s`, exact because the shifted
+    /// chain's increments are independent Gaussians. `s = 0` returns x̂0.
+    pub fn step_to(
+        &self,
+        d_t: Tensor<3>,
+        x0: Tensor<3>,
+        t: usize,
+        s: usize,
+        noise: Tensor<3>,
+    ) -> Tensor<3> {
+        assert!(s < t && t <= self.steps(), "PDDM step {t} → {s}");
+        if s == 0 {
+            return x0;
+        }
+        let (e, es) = (self.eta[t], self.eta[s]);
+        let a = e - es;
+        d_t * (es / e) + x0 * (a / e) + noise * (self.kappa * (es * a / e).sqrt())
+    }
+
+    /// `n` evenly spaced steps `T = t_0 > t_1 > … > t_{n−1} ≥ 1` (all `T` when `n ≥ T`).
+    pub fn strided(&self, n: usize) -> Vec<usize> {
+        let big_t = self.steps();
+        let n = n.clamp(1, big_t);
+        let mut v: Vec<usize> = (0..n)
+            .map(|i| big_t - ((i * big_t) as f64 / n as f64).round() as usize)
+            .collect();
+        v.dedup();
+        v
+    }
+
     /// The PDDM loss (15): `t ~ U{1..T}`, `d_t` from (9), `‖f_θ(d_t, ·, t − 1) − d0‖²`. The
     /// primitives reach the network through the system's condition type; the network receives
     /// the 0-based timestep `t − 1`.

@@ -110,6 +110,15 @@ impl Quantizer {
         }
     }
 
+    /// Size of the single codebook a token index points into (plain VQ only: the residual and
+    /// FSQ quantizers emit several indices per step).
+    pub fn codebook_size(&self) -> Option<usize> {
+        match self {
+            Quantizer::Vq(q) => Some(q.codebook.value_sync().dims()[0]),
+            _ => None,
+        }
+    }
+
     /// Indices as returned in [`QuantOutput::indices`] → quantized latents `[B, T, D]`.
     pub fn decode_indices(&self, indices: Tensor<3, Int>) -> Tensor<3> {
         match self {
