@@ -44,7 +44,15 @@ pub enum GroundMode {
     /// LODGE / FineDance (anchors.md A.6, C.3): frame-0 toe heights (joints 10, 11); their mean
     /// if they differ by less than 2 cm, else their minimum.
     FirstFrameToes,
+    /// The [`SUPPORT_PERCENTILE`]th percentile over frames of the lowest foot joint: the height
+    /// the supporting foot stands at, robust to the few frames where retargeting or capture
+    /// noise drops a foot far below the floor (CMU salsa retargeted to SMPL has its per-frame
+    /// lowest foot ~10 cm above the clip minimum in half the frames).
+    SupportFeet,
 }
+
+/// Percentile of [`GroundMode::SupportFeet`].
+pub const SUPPORT_PERCENTILE: f32 = 10.0;
 
 /// SMPL 24 motion, see the module documentation for the exact layout.
 #[derive(Debug, Clone, PartialEq)]
@@ -237,6 +245,19 @@ impl SmplMotion {
             GroundMode::ClipMinFeet => (0..t)
                 .flat_map(|f| FOOT_JOINTS.map(|j| y(f, j)))
                 .fold(f32::INFINITY, f32::min),
+            GroundMode::SupportFeet => {
+                let mut lows: Vec<f32> = (0..t)
+                    .map(|f| {
+                        FOOT_JOINTS
+                            .map(|j| y(f, j))
+                            .into_iter()
+                            .fold(f32::INFINITY, f32::min)
+                    })
+                    .collect();
+                lows.sort_by(f32::total_cmp);
+                let k = ((SUPPORT_PERCENTILE / 100.0) * (t - 1) as f32).round() as usize;
+                lows[k.min(t - 1)]
+            }
             GroundMode::FirstFrameToes => {
                 let (l, r) = (y(0, 10), y(0, 11));
                 if (l - r).abs() < 0.02 {
