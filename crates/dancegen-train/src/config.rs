@@ -142,6 +142,10 @@ pub struct DataConfig {
     /// Per-frame music features aligned with the motion.
     #[serde(default)]
     pub music: Option<MusicConfig>,
+    /// A `dancegen dataset build` manifest: each clip's genre (by motion file stem), used by
+    /// genre-conditioned models. Clips it does not list get no genre.
+    #[serde(default)]
+    pub manifest: Option<PathBuf>,
 }
 
 fn default_fps() -> f32 {
@@ -285,6 +289,9 @@ impl TrainConfig {
         c.data.paths = c.data.paths.iter().map(|p| abs(p)).collect();
         if let Some(m) = &mut c.data.music {
             m.dir = abs(&m.dir);
+        }
+        if let Some(m) = &mut c.data.manifest {
+            *m = abs(m);
         }
         c.validate()?;
         Ok(c)

@@ -32,6 +32,8 @@ pub struct Clip {
     pub motion: Vec<f32>,
     /// `(frames, music dims)`.
     pub music: Option<Vec<f32>>,
+    /// Index into the manifest's genre list.
+    pub genre: Option<usize>,
 }
 
 /// A batch on the training device.
@@ -41,6 +43,11 @@ pub struct Batch {
     pub motion: Tensor<3>,
     /// `[batch, window, music dims]`.
     pub music: Option<Tensor<3>>,
+    /// Genre index per batch element (when every window's clip has one).
+    pub genre: Option<Vec<usize>>,
+    /// Seed of the batch's own randomness (diffusion timesteps, masks, …): a function of the
+    /// run seed and the data position, so a resumed run draws the same numbers.
+    pub seed: u64,
 }
 
 /// Per-dimension statistics saved with the model (`normalizer.json`).
@@ -254,6 +261,7 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
             frames,
             motion,
             music,
+            genre: None,
         });
     }
     Ok(clips)
@@ -305,16 +313,78 @@ pub struct WindowDataset {
     pub seed: u64,
 }
 
-/// Stream id of the shuffles in [`derive_seed`].
+/// Stream ids of [`derive_seed`]: the shuffles and the batches' own seeds.
 const SHUFFLE_STREAM: u64 = 1;
+const BATCH_STREAM: u64 = 4;
+
+/// The genres of a `dancegen dataset build` manifest (`manifest.json`: `genres` and per clip
+/// `name` + `genre`).
+#[derive(Clone, Debug)]
+pub struct GenreManifest {
+    pub genres: Vec<String>,
+    by_name: std::collections::HashMap<String, usize>,
+}
+
+impl GenreManifest {
+    pub fn load(path: &Path) -> Result<Self, TrainError> {
+        #[derive(Deserialize)]
+        struct ClipEntry {
+            name: String,
+            genre: String,
+        }
+        #[derive(Deserialize)]
+        struct Manifest {
+            genres: Vec<String>,
+            clips: Vec<ClipEntry>,
+        }
+        let err = |reason: String| TrainError::Data {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| TrainError::io(path, e))?;
+        let m: Manifest =
+            serde_json::from_str(&text).map_err(|e| err(format!("not a dataset manifest: {e}")))?;
+        let mut by_name = std::collections::HashMap::new();
+        for c in m.clips {
+            let g = m.genres.iter().position(|g| *g == c.genre).ok_or_else(|| {
+                err(format!(
+                    "clip {}: genre {:?} is not in `genres`",
+                    c.name, c.genre
+                ))
+            })?;
+            by_name.insert(c.name, g);
+        }
+        Ok(Self {
+            genres: m.genres,
+            by_name,
+        })
+    }
+
+    /// The genre of the clip stored in `motion_file` (matched by file stem).
+    pub fn genre_of(&self, motion_file: &Path) -> Option<usize> {
+        let stem = motion_file.file_stem()?.to_str()?;
+        self.by_name.get(stem).copied()
+    }
+}
 
 impl WindowDataset {
     /// Reads every file of `c.paths`; returns the raw clips (fit the normaliser on them, then
     /// call [`WindowDataset::new`]).
     pub fn read_clips(c: &DataConfig) -> Result<Vec<Clip>, TrainError> {
+        let genres = match &c.manifest {
+            Some(m) => Some(GenreManifest::load(m)?),
+            None => None,
+        };
         let mut clips = Vec::new();
         for f in motion_files(&c.paths)? {
-            clips.extend(load_clips(&f, c)?);
+            let mut loaded = load_clips(&f, c)?;
+            if let Some(g) = &genres {
+                let genre = g.genre_of(&f);
+                for clip in &mut loaded {
+                    clip.genre = genre;
+                }
+            }
+            clips.extend(loaded);
         }
         Ok(clips)
     }
@@ -429,6 +499,23 @@ impl WindowDataset {
         let motion = Tensor::from_data(TensorData::new(motion, [b, w, self.dims]), device);
         let music = (self.music_dims > 0)
             .then(|| Tensor::from_data(TensorData::new(music, [b, w, self.music_dims]), device));
-        (Batch { motion, music }, next)
+        let genre: Option<Vec<usize>> = idx
+            .iter()
+            .map(|&i| self.clips[self.windows[i].0].genre)
+            .collect();
+        let seed = derive_seed(
+            self.seed,
+            BATCH_STREAM,
+            next.epoch.wrapping_mul(1 << 32) ^ next.cursor as u64,
+        );
+        (
+            Batch {
+                motion,
+                music,
+                genre,
+                seed,
+            },
+            next,
+        )
     }
 }

@@ -8,7 +8,7 @@ use burn::module::Module;
 use burn::store::ModuleSnapshot;
 use burn::tensor::{Device, Tensor};
 
-use crate::data::Batch;
+use crate::data::{Batch, Normalizer};
 
 /// The losses of one batch: `total` is differentiated, `parts` are logged (as scalars).
 pub struct Losses {
@@ -26,6 +26,14 @@ pub trait TrainTask {
     /// A freshly initialised model on `device` (the training device: autodiff). Random
     /// initialisation draws from the device's generator, which the trainer seeds first.
     fn init(&self, device: &Device) -> Self::Model;
+
+    /// A fresh model for a new run whose data `normalizer` maps: for models that carry the
+    /// statistics inside (e.g. to run forward kinematics on their own de-normalised output).
+    /// Checkpoints restore those from the weights, so resuming uses [`TrainTask::init`].
+    fn init_with_data(&self, device: &Device, normalizer: &Normalizer) -> Self::Model {
+        let _ = normalizer;
+        self.init(device)
+    }
 
     /// The loss of `model` on `batch` (`[B, window, dims]`, normalised).
     fn loss(&self, model: &Self::Model, batch: &Batch) -> Losses;

@@ -277,11 +277,11 @@ fn run<T: TrainTask>(
     let mut optim: ModuleOptimizer = build_optimizer(&config.optimizer);
     let (mut model, mut ema, mut step, mut pos, mut log) = match &ckpt {
         None => {
-            let model = task.init(&device);
+            let model = task.init_with_data(&device, &normalizer);
             let ema = config
                 .ema
                 .as_ref()
-                .map(|e| Ema::new(task.init(&device), &model, e.decay));
+                .map(|e| Ema::new(task.init_with_data(&device, &normalizer), &model, e.decay));
             (model, ema, 0, DataPosition::default(), TrainLog::default())
         }
         Some(c) => {

@@ -6,12 +6,18 @@ use crate::data::representation_dims;
 use crate::trainer::{self, RunOptions, RunSummary};
 use crate::{TrainConfig, TrainError, files};
 
+pub mod lodgepp;
 pub mod motion_autoencoder;
 
 pub use motion_autoencoder::MotionAutoencoderTask;
 
 /// Every `[model] kind` with a task.
-pub const KINDS: [&str; 1] = [motion_autoencoder::KIND];
+pub const KINDS: [&str; 4] = [
+    motion_autoencoder::KIND,
+    lodgepp::VQVAE,
+    lodgepp::GPT,
+    lodgepp::PDDM,
+];
 
 /// Starts a new run of the task `config` names (`config_path` for error messages).
 pub fn train_config(
@@ -23,6 +29,24 @@ pub fn train_config(
         motion_autoencoder::KIND => {
             trainer::train(&autoencoder(config, config_path)?, config, opts)
         }
+        lodgepp::VQVAE => trainer::train(
+            &lodgepp::VqvaeTask::from_config(config)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
+        lodgepp::GPT => trainer::train(
+            &lodgepp::GptTask::from_config(config, config_path)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
+        lodgepp::PDDM => trainer::train(
+            &lodgepp::PddmTask::from_config(config, config_path)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }
@@ -33,6 +57,24 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
     let path = run_dir.join(files::CONFIG);
     match kind(&config, &path)? {
         motion_autoencoder::KIND => trainer::resume(&autoencoder(&config, &path)?, run_dir, opts),
+        lodgepp::VQVAE => trainer::resume(
+            &lodgepp::VqvaeTask::from_config(&config)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        lodgepp::GPT => trainer::resume(
+            &lodgepp::GptTask::from_config(&config, &path)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        lodgepp::PDDM => trainer::resume(
+            &lodgepp::PddmTask::from_config(&config, &path)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }

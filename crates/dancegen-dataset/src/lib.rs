@@ -1,0 +1,780 @@
+//! Training sets for the dance models: motion clips paired with per-frame music features.
+//!
+//! Output layout (everything written atomically, the manifest last):
+//!
+//! ```text
+//! OUT/motion/<clip>.npz        SMPL 24 motion, 30 fps, Y-up, metres (AMASS-style npz,
+//!                              read back by dancegen_motion::formats::load_motion_file)
+//! OUT/music/<clip>.npy         (T, 35) float32 EDGE-35 features at 30 fps, T = motion frames
+//! OUT/held_out/{motion,music}/ the same for held-out clips (evaluation only)
+//! OUT/manifest.json            see [`manifest::Manifest`]
+//! ```
+//!
+//! Three ways to pair ([`Pairing`]):
+//! - **pseudo** ([`Pairing::Pseudo`]): no data set here pairs dance with music, so each motion
+//!   is time-warped onto the beats of a song ([`warp`]). This is a documented *pseudo*-pairing,
+//!   not ground truth: the dancer never heard that song.
+//! - **aistpp** / **finedance**: the data sets' own pairing ([`layouts`]).
+//!
+//! Music features are computed once per song over the whole song (as the reference repos do)
+//! and the clip's frames are sliced from that matrix, so a clip's beat/onset columns are the
+//! whole-song tracker's decisions.
+//!
+//! This crate has no deep-learning dependencies.
+
+pub mod error;
+pub mod genre;
+pub mod layouts;
+pub mod manifest;
+pub mod warp;
+
+use std::collections::{BTreeSet, HashMap};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use dancegen_metrics::FRAME_LEN;
+use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, try_motion_beats};
+use dancegen_motion::formats::{
+    ConvertOptions, LoadedMotion, NpzStyle, convert_motion, load_motion_file, save_motion_file,
+};
+use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
+use dancegen_music::FrameMatrix;
+use dancegen_music::decode::AudioSource;
+use dancegen_music::features::{EDGE35_DIM, ExtractOptions, FeatureSet, extract};
+use rayon::prelude::*;
+
+pub use error::DatasetError;
+pub use manifest::{ClipEntry, MANIFEST_VERSION, Manifest, PairingKind, WarpReport};
+use warp::{BeatMatch, WarpParams, match_beats, warp_motion};
+
+/// Frame rate of every clip (motion and music), EDGE/Lodge's 30 fps.
+pub const FPS: u32 = 30;
+
+/// Clips shorter than this (1 s) are dropped: too short to train on.
+pub const MIN_CLIP_FRAMES: usize = 30;
+
+/// Fraction of a song a motion piece may fill at the slowest allowed playback speed before
+/// the motion is split into several clips (leaves room for the start offset).
+const SONG_FILL: f64 = 0.9;
+
+/// How motion and music are paired.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pairing {
+    /// Beat-warp pseudo-pairing of `--motion` files with `--music` songs.
+    Pseudo,
+    /// AIST++ layout under `root` (`motions/*.pkl`, `wav/<music id>.wav`, `splits/`).
+    Aistpp,
+    /// FineDance layout under `root` (`motion/*.npy`, `music_wav/*.wav`, `label_json/*.json`).
+    FineDance,
+}
+
+/// Options of [`build`].
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    /// Output directory (created if missing).
+    pub out: PathBuf,
+    pub pairing: Pairing,
+    /// Motion files (pseudo pairing; any format `load_motion_file` reads; directories are
+    /// searched for motion files, non-recursively).
+    pub motions: Vec<PathBuf>,
+    /// Songs (pseudo pairing).
+    pub music: Vec<PathBuf>,
+    /// Data set root (aistpp / finedance).
+    pub root: Option<PathBuf>,
+    /// Genre of every input (default: from the file names).
+    pub genre: Option<String>,
+    /// Motion or song stems (file names without extension) kept out of training.
+    pub hold_out: Vec<String>,
+    /// Breaks exact ties between songs.
+    pub seed: u64,
+    pub warp: WarpParams,
+}
+
+impl BuildOptions {
+    /// Pseudo pairing of `motions` with `music` into `out`, defaults otherwise.
+    pub fn pseudo(out: impl Into<PathBuf>, motions: Vec<PathBuf>, music: Vec<PathBuf>) -> Self {
+        BuildOptions {
+            out: out.into(),
+            pairing: Pairing::Pseudo,
+            motions,
+            music,
+            root: None,
+            genre: None,
+            hold_out: Vec::new(),
+            seed: 0,
+            warp: WarpParams::default(),
+        }
+    }
+}
+
+/// Progress callbacks (the CLI draws a bar); every method has a no-op default.
+pub trait Progress: Sync {
+    /// A stage with `total` steps begins.
+    fn stage(&self, _name: &str, _total: usize) {}
+    /// One step of the current stage finished.
+    fn step(&self, _item: &str) {}
+}
+
+impl Progress for () {}
+
+/// A song analysed once: its EDGE-35 features over the whole song and its beats.
+#[derive(Clone, Debug)]
+pub struct Song {
+    /// File stem.
+    pub name: String,
+    pub path: PathBuf,
+    /// `(frames, 35)` at [`FPS`].
+    pub features: FrameMatrix,
+    /// Beat frames of the librosa-exact tracker (the features' beat column).
+    pub beat_frames: Vec<usize>,
+    pub tempo_bpm: f64,
+}
+
+impl Song {
+    /// EDGE-35 features at 30 fps of a whole song, exactly as `dancegen features` computes them.
+    pub fn analyse(path: &Path) -> Result<Song, DatasetError> {
+        let f = extract(
+            &AudioSource::File(path.to_path_buf()),
+            &ExtractOptions {
+                fps: FPS,
+                set: FeatureSet::Edge35,
+                start_bpm: None,
+            },
+        )?;
+        Ok(Song {
+            name: stem(path),
+            path: path.to_path_buf(),
+            beat_frames: f.beat_frames,
+            tempo_bpm: f.tempo_bpm,
+            features: f.features,
+        })
+    }
+
+    pub fn frames(&self) -> usize {
+        self.features.rows
+    }
+
+    pub fn duration_s(&self) -> f64 {
+        self.frames() as f64 / f64::from(FPS)
+    }
+
+    /// Beat times in seconds.
+    pub fn beat_times(&self) -> Vec<f64> {
+        self.beat_frames
+            .iter()
+            .map(|&b| b as f64 / f64::from(FPS))
+            .collect()
+    }
+
+    /// Feature rows `start..start + n`, flattened.
+    fn rows(&self, start: usize, n: usize) -> Vec<f32> {
+        self.features.data[start * EDGE35_DIM..(start + n) * EDGE35_DIM].to_vec()
+    }
+
+    /// Beats in `start..start + n`, relative to `start`.
+    fn beats_in(&self, start: usize, n: usize) -> Vec<usize> {
+        self.beat_frames
+            .iter()
+            .filter(|&&b| b >= start && b < start + n)
+            .map(|&b| b - start)
+            .collect()
+    }
+}
+
+/// File name without its extension.
+pub fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Kinematic beats of world joints `(T, 24, 3)`: frame indices into the `T − 1` velocity
+/// samples of strict local minima of the mean joint speed smoothed by a Gaussian of σ = 5
+/// frames — Bailando/FACT's "kinetic beat", computed by the metric crate's own BAS code, so the
+/// warp aligns exactly the beats the BAS metric later measures. (σ = 2 and 3 were tried on the
+/// salsa takes: more, noisier minima, more of them matched, but a smaller BAS gain.)
+pub fn kinematic_beats(joints: &[f64]) -> Vec<usize> {
+    try_motion_beats(joints, Variant::Bailando).unwrap_or_default()
+}
+
+/// Bailando's BAS of a clip's world joints against the clip's music beats (frames relative
+/// to the clip start, cut as Bailando cuts them).
+pub fn bas_bailando(joints: &[f64], music_beats: &[usize]) -> Option<f64> {
+    let frames = joints.len() / FRAME_LEN;
+    let motion = try_motion_beats(joints, Variant::Bailando).ok()?;
+    let music = clip_music_beats(music_beats, frames, Variant::Bailando);
+    beat_align_score(&music, &motion, Variant::Bailando)
+}
+
+fn world_joints(m: &SmplMotion, source: &Path) -> Result<Vec<f64>, DatasetError> {
+    let j = m
+        .joints_world()
+        .map_err(|e| DatasetError::input(source, format!("forward kinematics failed: {e}")))?;
+    Ok(j.into_iter().map(f64::from).collect())
+}
+
+/// One dancer's motion at 30 fps, ready to be paired.
+#[derive(Clone, Debug)]
+pub(crate) struct MotionUnit {
+    /// Clip name (pieces get `_<k>` appended).
+    pub name: String,
+    /// Stem of the source file (what `--hold-out` names).
+    pub stem: String,
+    pub source: PathBuf,
+    pub genre: String,
+    pub motion: SmplMotion,
+}
+
+/// Loads a motion file as SMPL 24 at 30 fps: BVH retargeted, 60 fps strided (EDGE), each dancer
+/// of a group file separately (`<stem>_d<k>`).
+pub(crate) fn load_units(path: &Path, genre: &str) -> Result<Vec<MotionUnit>, DatasetError> {
+    let loaded = load_motion_file(path)?;
+    let opts = ConvertOptions {
+        to_smpl24: true,
+        fps: Some(FPS as f32),
+        ..Default::default()
+    };
+    let converted = convert_motion(path, loaded, &opts)?;
+    let s = stem(path);
+    let unit = |name: String, motion: SmplMotion| MotionUnit {
+        name,
+        stem: s.clone(),
+        source: path.to_path_buf(),
+        genre: genre.to_string(),
+        motion,
+    };
+    match converted {
+        LoadedMotion::Smpl(m) => Ok(vec![unit(s.clone(), m)]),
+        LoadedMotion::Group(g) => Ok(g
+            .into_iter()
+            .enumerate()
+            .map(|(k, m)| unit(format!("{s}_d{k}"), m))
+            .collect()),
+        other => Err(DatasetError::input(
+            path,
+            format!("a {} has no SMPL rotations to train on", other.kind()),
+        )),
+    }
+}
+
+/// A finished clip before it is written.
+pub(crate) struct ClipData {
+    name: String,
+    genre: String,
+    source_motion: PathBuf,
+    source_song: PathBuf,
+    start_frame: usize,
+    motion: SmplMotion,
+    music: Vec<f32>,
+    pairing: PairingKind,
+    warp: Option<WarpReport>,
+    held_out: bool,
+}
+
+pub(crate) fn write_clip(out: &Path, c: &ClipData) -> Result<ClipEntry, DatasetError> {
+    let frames = c.motion.frames();
+    debug_assert_eq!(c.music.len(), frames * EDGE35_DIM);
+    let prefix = if c.held_out { "held_out/" } else { "" };
+    let motion_rel = format!("{prefix}motion/{}.npz", c.name);
+    let music_rel = format!("{prefix}music/{}.npy", c.name);
+    let motion_path = out.join(&motion_rel);
+    let opts = ConvertOptions {
+        npz_style: NpzStyle::Amass,
+        ..Default::default()
+    };
+    // Every clip stands on the floor y = 0 (where its supporting foot usually is), the
+    // convention the solo model's foot features and contact thresholds assume.
+    let mut motion = c.motion.clone();
+    motion
+        .put_on_ground_with(dancegen_motion::repr::motion::GroundMode::SupportFeet)
+        .map_err(|e| DatasetError::input(&motion_path, e))?;
+    save_motion_file(&motion_path, &LoadedMotion::Smpl(motion), &opts)?;
+    dancegen_io::write_npy_f32(&out.join(&music_rel), &[frames, EDGE35_DIM], &c.music)?;
+    let fps = f64::from(FPS);
+    Ok(ClipEntry {
+        name: c.name.clone(),
+        motion: motion_rel,
+        music: music_rel,
+        genre: c.genre.clone(),
+        source_motion: c.source_motion.display().to_string(),
+        source_song: c.source_song.display().to_string(),
+        song_start_s: c.start_frame as f64 / fps,
+        song_end_s: (c.start_frame + frames) as f64 / fps,
+        frames,
+        pairing: c.pairing,
+        warp: c.warp.clone(),
+    })
+}
+
+pub(crate) fn create_dirs(out: &Path) -> Result<(), DatasetError> {
+    for d in ["motion", "music", "held_out/motion", "held_out/music"] {
+        let p = out.join(d);
+        std::fs::create_dir_all(&p)
+            .map_err(|e| DatasetError::input(&p, format!("cannot create directory: {e}")))?;
+    }
+    Ok(())
+}
+
+/// What [`build`] produced.
+#[derive(Clone, Debug)]
+pub struct BuildReport {
+    pub manifest: Manifest,
+    pub manifest_path: PathBuf,
+}
+
+/// Builds the data set described by `opts` (see the crate docs).
+pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport, DatasetError> {
+    if let Some(g) = &opts.genre {
+        if g.trim().is_empty() {
+            return Err(DatasetError::Options("--genre must not be empty".into()));
+        }
+    }
+    let clips = match opts.pairing {
+        Pairing::Pseudo => build_pseudo(opts, progress)?,
+        Pairing::Aistpp | Pairing::FineDance => layouts::build_layout(opts, progress)?,
+    };
+    finish(&opts.out, clips)
+}
+
+fn finish(out: &Path, mut clips: Vec<ClipEntry>) -> Result<BuildReport, DatasetError> {
+    clips.sort_by(|a, b| a.name.cmp(&b.name));
+    let genres: BTreeSet<String> = clips.iter().map(|c| c.genre.clone()).collect();
+    let held_out = clips
+        .iter()
+        .filter(|c| c.motion.starts_with("held_out/"))
+        .map(|c| c.name.clone())
+        .collect();
+    let manifest = Manifest {
+        version: MANIFEST_VERSION,
+        fps: FPS,
+        genres: genres.into_iter().collect(),
+        clips,
+        held_out,
+    };
+    let manifest_path = out.join("manifest.json");
+    manifest.write(&manifest_path)?;
+    Ok(BuildReport {
+        manifest,
+        manifest_path,
+    })
+}
+
+/// Motion files named by `inputs` (directories: their motion files, sorted).
+fn expand_motion_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
+    let mut out = Vec::new();
+    for p in inputs {
+        if p.is_dir() {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|e| DatasetError::input(p, e))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.extension()
+                        .and_then(|e| e.to_str())
+                        .is_some_and(|e| ["pkl", "bvh", "npz", "npy"].contains(&e))
+                })
+                .collect();
+            v.sort();
+            if v.is_empty() {
+                return Err(DatasetError::input(p, "directory holds no motion files"));
+            }
+            out.extend(v);
+        } else {
+            out.push(p.clone());
+        }
+    }
+    Ok(out)
+}
+
+/// Fails on hold-out names that match nothing: a typo would silently leak test data into
+/// training.
+pub(crate) fn check_hold_out(
+    hold_out: &[String],
+    known: &BTreeSet<String>,
+) -> Result<(), DatasetError> {
+    let unknown: Vec<&String> = hold_out.iter().filter(|h| !known.contains(*h)).collect();
+    if unknown.is_empty() {
+        Ok(())
+    } else {
+        Err(DatasetError::Options(format!(
+            "--hold-out {} matches no input (give motion or song file names without extension)",
+            unknown
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )))
+    }
+}
+
+/// Analyses every song once (in parallel).
+pub(crate) fn analyse_songs(
+    paths: &[PathBuf],
+    progress: &dyn Progress,
+) -> Result<Vec<Song>, DatasetError> {
+    progress.stage("analysing songs", paths.len());
+    paths
+        .par_iter()
+        .map(|p| {
+            let s = Song::analyse(p);
+            progress.step(&stem(p));
+            s
+        })
+        .collect()
+}
+
+fn build_pseudo(
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<ClipEntry>, DatasetError> {
+    if opts.motions.is_empty() {
+        return Err(DatasetError::Options(
+            "--pairing pseudo needs --motion FILES".into(),
+        ));
+    }
+    if opts.music.is_empty() {
+        return Err(DatasetError::Options(
+            "--pairing pseudo needs --music SONGS".into(),
+        ));
+    }
+    let motions = expand_motion_inputs(&opts.motions)?;
+    let mut known = BTreeSet::new();
+    let mut seen: HashMap<String, &Path> = HashMap::new();
+    for p in motions.iter().chain(&opts.music) {
+        let s = stem(p);
+        if let Some(prev) = seen.insert(s.clone(), p) {
+            return Err(DatasetError::input(
+                p,
+                format!(
+                    "same file name as {} (clip and hold-out names come from file names)",
+                    prev.display()
+                ),
+            ));
+        }
+        known.insert(s);
+    }
+    check_hold_out(&opts.hold_out, &known)?;
+    let held = |s: &str| opts.hold_out.iter().any(|h| h == s);
+    let any_train_motion = motions.iter().any(|m| !held(&stem(m)));
+    if any_train_motion && opts.music.iter().all(|m| held(&stem(m))) {
+        return Err(DatasetError::Options(
+            "every song is held out: training motions need at least one song that is not".into(),
+        ));
+    }
+    let songs = analyse_songs(&opts.music, progress)?;
+    for s in &songs {
+        tracing::info!(
+            "{}: {:.1} s, tempo {:.1} BPM, {} beats",
+            s.path.display(),
+            s.duration_s(),
+            s.tempo_bpm,
+            s.beat_frames.len()
+        );
+    }
+    let train_songs: Vec<usize> = (0..songs.len())
+        .filter(|&i| !held(&songs[i].name))
+        .collect();
+    let held_songs: Vec<usize> = (0..songs.len()).filter(|&i| held(&songs[i].name)).collect();
+    let any_held_motion = motions.iter().any(|m| held(&stem(m)));
+    if !held_songs.is_empty() && !any_held_motion {
+        tracing::warn!(
+            "held-out songs are only paired with held-out motions, and no motion is held out: \
+             {} unused",
+            held_songs
+                .iter()
+                .map(|&i| songs[i].name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    create_dirs(&opts.out)?;
+    progress.stage("pairing motions", motions.len());
+    let results: Vec<Result<Vec<ClipEntry>, DatasetError>> = motions
+        .par_iter()
+        .map(|path| {
+            let s = stem(path);
+            let genre = opts
+                .genre
+                .as_deref()
+                .map(genre::normalize)
+                .unwrap_or_else(|| genre::genre_from_name(&s));
+            let motion_held = held(&s);
+            // Training motions never see a held-out song; held-out motions are paired with the
+            // held-out songs when there are any (unseen motion on unseen music), else any song.
+            let candidates = if motion_held && !held_songs.is_empty() {
+                &held_songs
+            } else {
+                &train_songs
+            };
+            let mut entries = Vec::new();
+            for unit in load_units(path, &genre)? {
+                for clip in pair_unit(&unit, &songs, candidates, opts, held)? {
+                    entries.push(write_clip(&opts.out, &clip)?);
+                }
+            }
+            progress.step(&s);
+            Ok(entries)
+        })
+        .collect();
+    let mut clips = Vec::new();
+    for r in results {
+        clips.extend(r?);
+    }
+    let mut names = BTreeSet::new();
+    for c in &clips {
+        if !names.insert(c.name.as_str()) {
+            return Err(DatasetError::Options(format!(
+                "two clips are named {} (rename one of the inputs)",
+                c.name
+            )));
+        }
+    }
+    Ok(clips)
+}
+
+/// A motion piece and its matching against one song.
+struct PiecePlan {
+    frames: Range<usize>,
+    motion_beats: usize,
+    matched: BeatMatch,
+}
+
+/// Splits a motion of `frames` frames into pieces short enough for a song of `song_s` seconds
+/// at the slowest playback speed the warp allows.
+fn piece_ranges(frames: usize, song_s: f64, p: &WarpParams) -> Vec<Range<usize>> {
+    let fps = f64::from(FPS);
+    let capacity = (SONG_FILL * song_s / p.max_rate * fps).floor() as usize;
+    if frames <= capacity || capacity < MIN_CLIP_FRAMES {
+        return std::iter::once(0..frames).collect();
+    }
+    let k = frames.div_ceil(capacity);
+    (0..k)
+        .map(|i| i * frames / k..(i + 1) * frames / k)
+        .collect()
+}
+
+fn plan_song(joints: &[f64], frames: usize, song: &Song, p: &WarpParams) -> Vec<PiecePlan> {
+    let fps = f64::from(FPS);
+    let music = song.beat_times();
+    piece_ranges(frames, song.duration_s(), p)
+        .into_iter()
+        .map(|r| {
+            let j = &joints[r.start * FRAME_LEN..r.end * FRAME_LEN];
+            let beats: Vec<f64> = kinematic_beats(j).iter().map(|&b| b as f64 / fps).collect();
+            let len = (r.len().saturating_sub(1)) as f64 / fps;
+            let matched = match_beats(&beats, &music, len, song.duration_s(), p);
+            PiecePlan {
+                frames: r,
+                motion_beats: beats.len(),
+                matched,
+            }
+        })
+        .collect()
+}
+
+/// Picks the song and produces the warped clips of one dancer.
+fn pair_unit(
+    unit: &MotionUnit,
+    songs: &[Song],
+    candidates: &[usize],
+    opts: &BuildOptions,
+    held: impl Fn(&str) -> bool,
+) -> Result<Vec<ClipData>, DatasetError> {
+    let m = &unit.motion;
+    let frames = m.frames();
+    if frames < MIN_CLIP_FRAMES {
+        tracing::warn!(
+            "{}: only {frames} frames at 30 fps, skipped",
+            unit.source.display()
+        );
+        return Ok(Vec::new());
+    }
+    let joints = world_joints(m, &unit.source)?;
+    let minutes = frames as f64 / f64::from(FPS) / 60.0;
+    // Most matched beats per minute of motion; exact ties go to the first song in an order
+    // rotated by the seed.
+    let n = candidates.len();
+    let mut best: Option<(f64, usize, Vec<PiecePlan>)> = None;
+    for k in 0..n {
+        let si = candidates[(k + opts.seed as usize % n.max(1)) % n];
+        let plan = plan_song(&joints, frames, &songs[si], &opts.warp);
+        let matched: usize = plan.iter().map(|p| p.matched.pairs.len()).sum();
+        let score = matched as f64 / minutes;
+        tracing::debug!(
+            "{} x {}: {score:.1} matched beats/min",
+            unit.name,
+            songs[si].name
+        );
+        if best.as_ref().is_none_or(|(b, _, _)| score > *b) {
+            best = Some((score, si, plan));
+        }
+    }
+    let Some((_, si, plan)) = best else {
+        return Err(DatasetError::Options(format!(
+            "{}: no song to pair with",
+            unit.source.display()
+        )));
+    };
+    let song = &songs[si];
+    let pieces = plan.len();
+    let mut clips = Vec::new();
+    for (k, piece) in plan.into_iter().enumerate() {
+        let r = piece.frames.clone();
+        let src = SmplMotion {
+            fps: m.fps,
+            poses: m.poses[r.start * POSE_DIMS..r.end * POSE_DIMS].to_vec(),
+            trans: m.trans[r.start * 3..r.end * 3].to_vec(),
+        };
+        let (start, warped) = warp_motion(&src, &piece.matched.map, song.frames());
+        let n = warped.frames();
+        let name = if pieces == 1 {
+            unit.name.clone()
+        } else {
+            format!("{}_{k}", unit.name)
+        };
+        if n < MIN_CLIP_FRAMES {
+            tracing::warn!("{name}: only {n} frames fit in {}, skipped", song.name);
+            continue;
+        }
+        let after = bas_bailando(
+            &world_joints(&warped, &unit.source)?,
+            &song.beats_in(start, n),
+        );
+        // The same piece unwarped, placed at the same song start.
+        let fps = f64::from(FPS);
+        let p0 = (piece.matched.map.inverse(start as f64 / fps) * fps)
+            .round()
+            .clamp(0.0, (r.len() - 1) as f64) as usize;
+        let len = (r.len() - p0).min(song.frames() - start);
+        let a = (r.start + p0) * FRAME_LEN;
+        let before = bas_bailando(&joints[a..a + len * FRAME_LEN], &song.beats_in(start, len));
+        let rates = piece.matched.map.rates();
+        let report = WarpReport {
+            min_rate: rates.iter().copied().fold(f64::INFINITY, f64::min),
+            max_rate: rates.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            matched_beats: piece.matched.pairs.len(),
+            motion_beats: piece.motion_beats,
+            bas_before: before,
+            bas_after: after,
+        };
+        clips.push(ClipData {
+            name,
+            genre: unit.genre.clone(),
+            source_motion: unit.source.clone(),
+            source_song: song.path.clone(),
+            start_frame: start,
+            music: song.rows(start, n),
+            motion: warped,
+            pairing: PairingKind::PseudoBeatWarp,
+            warp: Some(report),
+            held_out: held(&unit.stem) || held(&song.name),
+        });
+    }
+    Ok(clips)
+}
+
+/// A clip of a data set's own pairing: the first `min(motion, song)` frames of both.
+pub(crate) fn original_clip(
+    unit: &MotionUnit,
+    song: &Song,
+    held_out: bool,
+) -> Result<Option<ClipData>, DatasetError> {
+    let n = unit.motion.frames().min(song.frames());
+    if n < MIN_CLIP_FRAMES {
+        tracing::warn!(
+            "{}: only {n} paired frames with {}, skipped",
+            unit.source.display(),
+            song.path.display()
+        );
+        return Ok(None);
+    }
+    let m = &unit.motion;
+    Ok(Some(ClipData {
+        name: unit.name.clone(),
+        genre: unit.genre.clone(),
+        source_motion: unit.source.clone(),
+        source_song: song.path.clone(),
+        start_frame: 0,
+        motion: SmplMotion {
+            fps: m.fps,
+            poses: m.poses[..n * POSE_DIMS].to_vec(),
+            trans: m.trans[..n * 3].to_vec(),
+        },
+        music: song.rows(0, n),
+        pairing: PairingKind::Original,
+        warp: None,
+        held_out,
+    }))
+}
+
+/// A fixed-width summary table of the clips (name, song, frames, rates, beats, BAS).
+pub fn summary_table(m: &Manifest) -> String {
+    let mut s = format!(
+        "{:<28} {:<24} {:>6} {:>8} {:>8} {:>9} {:>8} {:>8} {}\n",
+        "clip", "song", "frames", "rate_min", "rate_max", "matched", "bas_pre", "bas_post", "split"
+    );
+    let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+    for c in &m.clips {
+        let song = stem(Path::new(&c.source_song));
+        let split = if m.held_out.contains(&c.name) {
+            "held_out"
+        } else {
+            "train"
+        };
+        match &c.warp {
+            Some(w) => s.push_str(&format!(
+                "{:<28} {:<24} {:>6} {:>8.3} {:>8.3} {:>4}/{:<4} {:>8} {:>8} {split}\n",
+                c.name,
+                song,
+                c.frames,
+                w.min_rate,
+                w.max_rate,
+                w.matched_beats,
+                w.motion_beats,
+                f(w.bas_before),
+                f(w.bas_after)
+            )),
+            None => s.push_str(&format!(
+                "{:<28} {:<24} {:>6} {:>8} {:>8} {:>9} {:>8} {:>8} {split}\n",
+                c.name, song, c.frames, "-", "-", "-", "-", "-"
+            )),
+        }
+    }
+    let warped: Vec<&WarpReport> = m.clips.iter().filter_map(|c| c.warp.as_ref()).collect();
+    if !warped.is_empty() {
+        let mean = |g: &dyn Fn(&WarpReport) -> Option<f64>| {
+            let v: Vec<f64> = warped.iter().filter_map(|w| g(w)).collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        };
+        s.push_str(&format!(
+            "{} warped clips: mean BAS {:.3} -> {:.3}, rates {:.3}..{:.3}, {} / {} motion beats matched\n",
+            warped.len(),
+            mean(&|w| w.bas_before),
+            mean(&|w| w.bas_after),
+            warped.iter().map(|w| w.min_rate).fold(f64::INFINITY, f64::min),
+            warped.iter().map(|w| w.max_rate).fold(f64::NEG_INFINITY, f64::max),
+            warped.iter().map(|w| w.matched_beats).sum::<usize>(),
+            warped.iter().map(|w| w.motion_beats).sum::<usize>(),
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_motions_are_split_to_fit_the_song() {
+        let p = WarpParams::default();
+        // 60 s song: at most 0.9 * 60 * 0.85 = 45.9 s of motion per piece (1377 frames).
+        assert_eq!(piece_ranges(1377, 60.0, &p), vec![0..1377]);
+        let r = piece_ranges(3000, 60.0, &p);
+        assert_eq!(r.len(), 3);
+        assert_eq!(r.first().unwrap().start, 0);
+        assert_eq!(r.last().unwrap().end, 3000);
+        for w in r.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+        }
+        assert!(r.iter().all(|x| x.len() <= 1377));
+    }
+}

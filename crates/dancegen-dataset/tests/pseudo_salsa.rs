@@ -1,0 +1,147 @@
+//! Beat-warp pseudo-pairing on real data: a CMU salsa take and a Sectoid song.
+
+mod common;
+
+use dancegen_dataset::warp::MAX_TEMPO_CHANGE;
+use dancegen_dataset::{BuildOptions, DatasetError, Manifest, PairingKind, build, summary_table};
+use dancegen_motion::formats::{LoadedMotion, load_motion_file};
+
+#[test]
+fn salsa_take_is_warped_onto_metal_madness() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = BuildOptions::pseudo(
+        &out,
+        vec![
+            common::salsa("60_01_scaled.bvh"),
+            common::salsa("61_01_scaled.bvh"),
+        ],
+        vec![common::song("metal_madness.ogg")],
+    );
+    // The partner is held out; with no held-out song it is paired with any song.
+    opts.hold_out = vec!["61_01_scaled".into()];
+    let t0 = std::time::Instant::now();
+    let report = build(&opts, &()).expect("build");
+    println!("built in {:.1} s", t0.elapsed().as_secs_f64());
+    print!("{}", summary_table(&report.manifest));
+
+    let m = Manifest::read(&out.join("manifest.json")).expect("manifest parses");
+    assert_eq!(m, report.manifest);
+    assert_eq!(m.version, 1);
+    assert_eq!(m.fps, 30);
+    assert_eq!(m.genres, vec!["salsa".to_string()]);
+    assert_eq!(
+        m.clips.len(),
+        2,
+        "18 s takes fit in a 144 s song: one clip each"
+    );
+    assert_eq!(m.held_out, vec!["61_01_scaled".to_string()]);
+    let (lo, hi) = (
+        1.0 / (1.0 + MAX_TEMPO_CHANGE),
+        1.0 / (1.0 - MAX_TEMPO_CHANGE),
+    );
+    for c in &m.clips {
+        assert_eq!(c.pairing, PairingKind::PseudoBeatWarp);
+        let held = c.name == "61_01_scaled";
+        assert_eq!(
+            c.motion.starts_with("held_out/motion/"),
+            held,
+            "{}",
+            c.motion
+        );
+        assert_eq!(c.music.starts_with("held_out/music/"), held, "{}", c.music);
+        // Music rows == motion frames, and both files agree with the manifest.
+        let music = dancegen_io::read_npy(&out.join(&c.music)).unwrap();
+        assert_eq!(music.shape, vec![c.frames, 35]);
+        let LoadedMotion::Smpl(motion) = load_motion_file(&out.join(&c.motion)).unwrap() else {
+            panic!("{}: not an SMPL motion", c.motion);
+        };
+        assert_eq!(motion.frames(), c.frames);
+        assert_eq!(motion.fps, 30.0);
+        assert!((c.song_end_s - c.song_start_s - c.frames as f64 / 30.0).abs() < 1e-9);
+        assert!(c.song_start_s >= 0.0 && c.song_end_s <= 144.5);
+        // A 15 % tempo limit means playback speed 1/rate in [0.85, 1.15].
+        let w = c.warp.as_ref().expect("warp report");
+        assert!(w.min_rate >= lo - 1e-9 && w.max_rate <= hi + 1e-9, "{w:?}");
+        assert!(1.0 / w.max_rate >= 0.85 - 1e-9 && 1.0 / w.min_rate <= 1.15 + 1e-9);
+        assert!(
+            w.matched_beats * 2 > w.motion_beats,
+            "most kinematic beats matched: {w:?}"
+        );
+        let (before, after) = (w.bas_before.unwrap(), w.bas_after.unwrap());
+        assert!(
+            after > before + 0.03 && after > 1.15 * before,
+            "BAS {before:.3} -> {after:.3}"
+        );
+        // The song's beat column inside the clip is the whole-song tracker's.
+        let beats = (0..c.frames)
+            .filter(|&r| music.data[r * 35 + 34] == 1.0)
+            .count();
+        assert!(beats as f64 > 0.8 * c.frames as f64 / 30.0 * 150.0 / 60.0);
+    }
+}
+
+#[test]
+fn training_motion_without_a_training_song_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = BuildOptions::pseudo(
+        dir.path().join("set"),
+        vec![common::salsa("60_01_scaled.bvh")],
+        vec![common::song("metal_madness.ogg")],
+    );
+    opts.hold_out = vec!["metal_madness".into()];
+    let e = build(&opts, &()).unwrap_err();
+    assert!(matches!(e, DatasetError::Options(_)), "{e}");
+    assert!(e.to_string().contains("held out"), "{e}");
+    // A hold-out name that matches nothing is refused (a typo would leak test data).
+    opts.hold_out = vec!["metal_madnes".into()];
+    let e = build(&opts, &()).unwrap_err();
+    assert!(e.to_string().contains("metal_madnes"), "{e}");
+    assert!(!dir.path().join("set/manifest.json").exists());
+}
+
+#[test]
+fn held_out_song_pairs_only_with_held_out_motions() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = BuildOptions::pseudo(
+        &out,
+        vec![
+            common::salsa("60_10_scaled.bvh"),
+            common::salsa("61_10_scaled.bvh"),
+        ],
+        vec![
+            common::song("metal_madness.ogg"),
+            common::song("escape_from_chaosland.ogg"),
+        ],
+    );
+    opts.hold_out = vec!["escape_from_chaosland".into(), "61_10_scaled".into()];
+    let m = build(&opts, &()).expect("build").manifest;
+    print!("{}", summary_table(&m));
+    assert_eq!(m.clips.len(), 2);
+    for c in &m.clips {
+        let held = c.name.starts_with("61_10");
+        assert_eq!(
+            c.source_song.ends_with("escape_from_chaosland.ogg"),
+            held,
+            "{c:?}"
+        );
+        assert_eq!(c.motion.starts_with("held_out/"), held);
+        assert_eq!(m.held_out.contains(&c.name), held);
+        assert!(out.join(&c.motion).is_file() && out.join(&c.music).is_file());
+    }
+}
+
+#[test]
+fn bad_input_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("broken.bvh");
+    std::fs::write(&bad, "HIERARCHY\nROOT hip\n{").unwrap();
+    let opts = BuildOptions::pseudo(
+        dir.path().join("set"),
+        vec![bad.clone()],
+        vec![dir.path().join("missing.ogg")],
+    );
+    let e = build(&opts, &()).unwrap_err().to_string();
+    assert!(e.contains("missing.ogg") || e.contains("broken.bvh"), "{e}");
+}

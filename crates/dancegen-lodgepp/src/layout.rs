@@ -1,0 +1,70 @@
+//! Which channels of the EDGE-151 frame vector (`dancegen_motion::repr::Edge151`: contacts 4,
+//! Z-up root position 3, 24 × 6D) each part of the system reads.
+//!
+//! Root horizontal position: every PDDM window stores its root x/y (Z-up horizontal plane)
+//! relative to the window's first frame, so windows generated in parallel can be placed one
+//! after another. In normalised units that is `(x − x_first) / std`, i.e. the normaliser's mean
+//! is not added back for those two channels ([`ROOT_HORIZONTAL`]).
+
+use std::ops::Range;
+
+use dancegen_motion::repr::Edge151;
+
+/// Values per frame.
+pub const DIMS: usize = Edge151::DIMS;
+/// Contact labels (left ankle, right ankle, left toe, right toe).
+pub const CONTACTS: Range<usize> = Edge151::CONTACTS;
+/// Z-up root x, y (horizontal); z is the height.
+pub const ROOT_HORIZONTAL: [usize; 2] = [4, 5];
+pub const ROOT_HEIGHT: usize = 6;
+/// First 6D channel.
+pub const ROT6D_START: usize = 7;
+
+/// The VQ-VAE's "main joints" (paper §3.3.1: root, left/right shoulder, left/right arm,
+/// left/right leg), as SMPL 24 indices: pelvis 0, shoulders 16/17, elbows 18/19, hips 1/2. The
+/// paper names body parts, not indices; this is our reading.
+pub const MAIN_JOINTS: [usize; 7] = [0, 16, 17, 18, 19, 1, 2];
+/// Coarse-dance channels (7 × 6D = 42).
+pub const MAIN_DIMS: usize = MAIN_JOINTS.len() * 6;
+
+/// Joints compared when retrieving a primitive from the library (D.3 uses hips, knees,
+/// shoulders, elbows; the coarse dance has no knees, so: hips, shoulders, elbows). Positions in
+/// [`MAIN_JOINTS`].
+pub const RETRIEVAL_MAIN: [usize; 6] = [1, 2, 3, 4, 5, 6];
+
+/// SMPL joints of the feet the refine block and the contact loss use (ankles 7/8, toes 10/11,
+/// the order of the contact labels).
+pub const FEET: [usize; 4] = [7, 8, 10, 11];
+
+/// Channel of the 6D value `k` of joint `j`.
+pub fn rot6d(j: usize, k: usize) -> usize {
+    ROT6D_START + 6 * j + k
+}
+
+/// The 42 coarse-dance channels, in [`MAIN_JOINTS`] order.
+pub fn main_channels() -> Vec<usize> {
+    MAIN_JOINTS
+        .iter()
+        .flat_map(|&j| (0..6).map(move |k| rot6d(j, k)))
+        .collect()
+}
+
+/// Every channel except the root's horizontal position (what a hard boundary cue fixes at a
+/// window's tail, where the absolute position is not known in advance).
+pub fn all_but_root_horizontal() -> Vec<usize> {
+    (0..DIMS).filter(|c| !ROOT_HORIZONTAL.contains(c)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn main_channels_are_the_6d_of_the_main_joints() {
+        let c = main_channels();
+        assert_eq!(c.len(), MAIN_DIMS);
+        assert_eq!(&c[..6], &[7, 8, 9, 10, 11, 12]);
+        assert_eq!(c[6], 7 + 6 * 16);
+        assert!(c.iter().all(|&x| x < DIMS));
+    }
+}

@@ -1,0 +1,523 @@
+//! Music features → dance: the whole Lodge++ inference (paper Fig. 2) and the two ablation
+//! samplers the evaluation compares it with.
+//!
+//! - [`Sampler::Lodgepp`]: GPT tokens for the whole song → VQ decoder → coarse dance → motion
+//!   beats → key motions retrieved from the library and moved onto the nearest music beats,
+//!   boundary primitives at every window edge → all PDDM windows denoised in one batch →
+//!   windows concatenated, each placed where the previous one ends.
+//! - [`Sampler::Autoregressive`] ("without the global network"): no primitives; window after
+//!   window, each continuing the last 4 frames of the previous one (inpainting).
+//! - [`Sampler::Edge`]: EDGE's long-form sampling (D.1) with the same network and no
+//!   primitives: windows overlapping by half, denoised in one batch, window `i`'s first half
+//!   overwritten by window `i − 1`'s second half after every step.
+
+use dancegen_nn::burn;
+use dancegen_nn::diffusion::pddm::ResidualShift;
+use dancegen_nn::gpt::SamplingOptions;
+
+use burn::tensor::{Device, Int, Tensor, TensorData};
+
+use crate::bundle::SoloModel;
+use crate::choreo_gpt::MUSIC_DIMS;
+use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
+use crate::denoiser::PddmCond;
+use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
+use crate::library::{key_of, relative_root, retrieval_channels};
+use crate::penetration::PenetrationGuidance;
+use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
+use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
+
+/// Which long-form sampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampler {
+    Lodgepp,
+    Autoregressive,
+    Edge,
+}
+
+/// Everything a generation run can change.
+#[derive(Clone, Debug)]
+pub struct GenerateOptions {
+    pub genre: usize,
+    pub seed: u64,
+    pub steps: usize,
+    pub guidance: f64,
+    pub sampler: Sampler,
+    pub refine: bool,
+    pub penetration: Option<(PenetrationGuidance, usize)>,
+    pub gpt: SamplingOptions,
+    pub max_beat_shift: usize,
+}
+
+impl GenerateOptions {
+    /// The bundle's defaults for `genre` and `seed`.
+    pub fn defaults(model: &SoloModel, genre: usize, seed: u64) -> Self {
+        let s = &model.config.sampling;
+        Self {
+            genre,
+            seed,
+            steps: s.steps,
+            guidance: s.guidance,
+            sampler: Sampler::Lodgepp,
+            refine: true,
+            penetration: Some((
+                PenetrationGuidance {
+                    scale: s.penetration_scale,
+                    iterations: s.penetration_iterations,
+                },
+                s.penetration_steps,
+            )),
+            gpt: SamplingOptions {
+                greedy: s.gpt_top_k <= 1,
+                temperature: s.gpt_temperature,
+                top_k: Some(s.gpt_top_k.max(1)),
+                seed,
+            },
+            max_beat_shift: s.max_beat_shift,
+        }
+    }
+}
+
+/// A generated dance: raw EDGE-151 frames (Z-up, absolute root) and what was done.
+pub struct GeneratedDance {
+    /// `[frames, 151]`.
+    pub frames: Vec<f32>,
+    pub n_frames: usize,
+    pub windows: usize,
+    /// Key motions placed (Lodge++ sampler).
+    pub key_motions: usize,
+}
+
+impl SoloModel {
+    fn shift(&self) -> ResidualShift {
+        self.config.pddm.shift.schedule()
+    }
+
+    /// Dance for `music` `[frames, 35]` (30 fps EDGE features) with music beats at
+    /// `beat_frames`.
+    pub fn generate(
+        &self,
+        music: &[f32],
+        beat_frames: &[usize],
+        opts: &GenerateOptions,
+        device: &Device,
+        grad_device: &Device,
+    ) -> GeneratedDance {
+        let frames = music.len() / MUSIC_DIMS;
+        assert!(frames > 0, "no music frames");
+        let n = self.config.pddm.pddm.window;
+        let (windows, key_motions, advance) = match opts.sampler {
+            Sampler::Lodgepp => {
+                let (w, k) = self.lodgepp(music, beat_frames, frames, opts, device, grad_device);
+                (w, k, n)
+            }
+            Sampler::Autoregressive => (
+                self.autoregressive(music, frames, opts, device, grad_device),
+                0,
+                n - BOUNDARY_FRAMES,
+            ),
+            Sampler::Edge => (
+                self.edge(music, frames, opts, device, grad_device),
+                0,
+                n / 2,
+            ),
+        };
+        let nwin = windows.len() / (n * DIMS);
+        let mut out = place_windows(&windows, n, advance);
+        out.truncate(frames * DIMS);
+        // Normalised → raw (the root's horizontal position has no mean: window-relative).
+        let (scale, shift) = self.pddm.denorm.host();
+        for f in out.chunks_mut(DIMS) {
+            for c in 0..DIMS {
+                f[c] = f[c] * scale[c] + shift[c];
+            }
+        }
+        GeneratedDance {
+            n_frames: out.len() / DIMS,
+            frames: out,
+            windows: nwin,
+            key_motions,
+        }
+    }
+
+    /// Music `[frames, 35]` cut into `count` windows of `n` frames starting every `advance`
+    /// frames (the last frame repeated past the end).
+    fn music_windows(
+        music: &[f32],
+        frames: usize,
+        n: usize,
+        advance: usize,
+        count: usize,
+    ) -> Vec<f32> {
+        let mut out = Vec::with_capacity(count * n * MUSIC_DIMS);
+        for w in 0..count {
+            for f in 0..n {
+                let src = (w * advance + f).min(frames - 1);
+                out.extend_from_slice(&music[src * MUSIC_DIMS..(src + 1) * MUSIC_DIMS]);
+            }
+        }
+        out
+    }
+
+    fn cond(
+        &self,
+        music: Vec<f32>,
+        prims: &[WindowPrimitives],
+        genre: usize,
+        device: &Device,
+    ) -> PddmCond {
+        let b = prims.len();
+        let n = prims[0].mask.len();
+        let values: Vec<f32> = prims
+            .iter()
+            .flat_map(|p| p.values.iter().copied())
+            .collect();
+        let mask: Vec<f32> = prims.iter().flat_map(|p| p.mask.iter().copied()).collect();
+        PddmCond {
+            music: Tensor::from_data(TensorData::new(music, [b, n, MUSIC_DIMS]), device),
+            genre: vec![genre; b],
+            primitives: Tensor::from_data(TensorData::new(values, [b, n, DIMS]), device),
+            mask: Tensor::from_data(TensorData::new(mask, [b, n, 1]), device),
+        }
+    }
+
+    fn sample_opts(&self, opts: &GenerateOptions, seed: u64) -> PddmSampleOptions {
+        PddmSampleOptions {
+            steps: opts.steps,
+            guidance: opts.guidance,
+            refine: opts.refine,
+            penetration: opts.penetration,
+            seed,
+        }
+    }
+
+    /// The coarse dance `[frames_padded, 42]` in the PDDM's normalised units.
+    fn coarse_dance(
+        &self,
+        music: &[f32],
+        frames: usize,
+        opts: &GenerateOptions,
+        device: &Device,
+    ) -> Vec<f32> {
+        let padded = frames.div_ceil(TOKEN_FRAMES) * TOKEN_FRAMES;
+        let m = Self::music_windows(music, frames, padded, padded, 1);
+        let mt = Tensor::<3>::from_data(TensorData::new(m, [1, padded, MUSIC_DIMS]), device);
+        let g = &self.config.gpt.gpt;
+        let tokens =
+            self.gpt
+                .generate(mt, opts.genre, g.window_tokens, g.overlap_tokens, &opts.gpt);
+        let nt = tokens.len();
+        let idx = Tensor::<3, Int>::from_data(TensorData::new(tokens, [1, nt, 1]), device);
+        let coarse: Vec<f32> = self
+            .vqvae
+            .decode(idx)
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .unwrap();
+        // VQ-VAE units → raw 6D → PDDM units.
+        let chans = main_channels();
+        let mut out = coarse;
+        for f in out.chunks_mut(MAIN_DIMS) {
+            for (k, &c) in chans.iter().enumerate() {
+                let raw = f64::from(f[k]) * self.vqvae_norm.std[c] + self.vqvae_norm.mean[c];
+                f[k] = ((raw - self.norm.mean[c]) / self.norm.std[c]) as f32;
+            }
+        }
+        out
+    }
+
+    /// A library clip `[8, 151]` for the coarse frames `[start, start + 8)`, with the coarse
+    /// dance's root orientation.
+    fn retrieve(&self, coarse: &[f32], start: usize) -> Vec<f32> {
+        let chans = main_channels();
+        // The coarse frames laid out as PDDM frames (only the main channels set).
+        let mut frames = vec![0f32; PRIMITIVE_FRAMES * DIMS];
+        for f in 0..PRIMITIVE_FRAMES {
+            for (k, &c) in chans.iter().enumerate() {
+                frames[f * DIMS + c] = coarse[(start + f) * MAIN_DIMS + k];
+            }
+        }
+        let key = key_of(&frames, DIMS, &retrieval_channels());
+        let mut clip = self.library.nearest(&key).to_vec();
+        for f in 0..PRIMITIVE_FRAMES {
+            for k in 0..6 {
+                let c = layout::rot6d(0, k);
+                clip[f * DIMS + c] = frames[f * DIMS + c];
+            }
+        }
+        clip
+    }
+
+    /// The full system; returns the windows `[l, n, 151]` and the number of key motions.
+    fn lodgepp(
+        &self,
+        music: &[f32],
+        beat_frames: &[usize],
+        frames: usize,
+        opts: &GenerateOptions,
+        device: &Device,
+        grad_device: &Device,
+    ) -> (Vec<f32>, usize) {
+        let n = self.config.pddm.pddm.window;
+        let l = frames.div_ceil(n);
+        let coarse = self.coarse_dance(music, frames, opts, device);
+        let cf = coarse.len() / MAIN_DIMS;
+        let half = PRIMITIVE_FRAMES / 2;
+        // Motion beats of the coarse dance → nearest music beats.
+        let beats = motion_beats(&speed(
+            &coarse,
+            MAIN_DIMS,
+            &(0..MAIN_DIMS).collect::<Vec<_>>(),
+        ));
+        let aligned = align_to_music(&beats, beat_frames, opts.max_beat_shift);
+        let mut prims: Vec<WindowPrimitives> = (0..l).map(|_| WindowPrimitives::empty(n)).collect();
+        let mut keys = 0;
+        for (w, p) in prims.iter_mut().enumerate() {
+            let lo = w * n;
+            let in_window: Vec<(usize, usize)> = aligned
+                .iter()
+                .filter(|&&(m, b)| b >= lo && b < lo + n && m >= half && m + half <= cf)
+                .map(|&(m, b)| (m, b - lo))
+                .collect();
+            let centres = key_centres(&in_window.iter().map(|&(_, b)| b).collect::<Vec<_>>(), n);
+            for c in centres {
+                let (m, _) = in_window.iter().find(|&&(_, b)| b == c).copied().unwrap();
+                let clip = self.retrieve(&coarse, m - half);
+                p.put(c - half, &clip, false);
+                keys += 1;
+            }
+        }
+        // Boundary primitives: clip frames 0..4 end window w − 1, 4..8 start window w.
+        let mut cue_v = vec![0f32; l * n * DIMS];
+        let mut cue_m = vec![0f32; l * n * DIMS];
+        let all_but_root = layout::all_but_root_horizontal();
+        for w in 1..l {
+            let at = (w * n).min(cf - half).max(half);
+            let mut clip = self.retrieve(&coarse, at - half);
+            relative_root(&mut clip, half);
+            prims[w].put(0, &clip[half * DIMS..], true);
+            prims[w - 1].put(n - half, &clip[..half * DIMS], false);
+            for f in 0..half {
+                for c in 0..DIMS {
+                    let i = ((w * n) + f) * DIMS + c;
+                    cue_v[i] = clip[(half + f) * DIMS + c];
+                    cue_m[i] = 1.0;
+                }
+                for &c in &all_but_root {
+                    let i = ((w - 1) * n + n - half + f) * DIMS + c;
+                    cue_v[i] = clip[f * DIMS + c];
+                    cue_m[i] = 1.0;
+                }
+            }
+        }
+        let m = Self::music_windows(music, frames, n, n, l);
+        let cond = self.cond(m, &prims, opts.genre, device);
+        let cues = HardCues {
+            values: Tensor::from_data(TensorData::new(cue_v, [l, n, DIMS]), device),
+            mask: Tensor::from_data(TensorData::new(cue_m, [l, n, DIMS]), device),
+        };
+        let x = sample_windows(
+            &self.pddm,
+            &self.shift(),
+            &cond,
+            Some(&cues),
+            &self.sample_opts(opts, opts.seed),
+            device,
+            grad_device,
+        );
+        (host(x), keys)
+    }
+
+    /// Window after window, each starting with the previous one's last 4 frames.
+    fn autoregressive(
+        &self,
+        music: &[f32],
+        frames: usize,
+        opts: &GenerateOptions,
+        device: &Device,
+        grad_device: &Device,
+    ) -> Vec<f32> {
+        let n = self.config.pddm.pddm.window;
+        let adv = n - BOUNDARY_FRAMES;
+        let l = frames.saturating_sub(BOUNDARY_FRAMES).div_ceil(adv).max(1);
+        let shift = self.shift();
+        let mut out: Vec<f32> = Vec::with_capacity(l * n * DIMS);
+        let mut prev: Option<Vec<f32>> = None;
+        for w in 0..l {
+            let mut p = WindowPrimitives::empty(n);
+            let mut cue_v = vec![0f32; n * DIMS];
+            let mut cue_m = vec![0f32; n * DIMS];
+            if let Some(pw) = &prev {
+                let mut head = pw[(n - BOUNDARY_FRAMES) * DIMS..].to_vec();
+                relative_root(&mut head, 0);
+                p.put(0, &head, true);
+                cue_v[..head.len()].copy_from_slice(&head);
+                cue_m[..head.len()].iter_mut().for_each(|v| *v = 1.0);
+            }
+            let m = Self::music_windows(&music[w * adv * MUSIC_DIMS..], frames - w * adv, n, n, 1);
+            let cond = self.cond(m, std::slice::from_ref(&p), opts.genre, device);
+            let cues = HardCues {
+                values: Tensor::from_data(TensorData::new(cue_v, [1, n, DIMS]), device),
+                mask: Tensor::from_data(TensorData::new(cue_m, [1, n, DIMS]), device),
+            };
+            let x = host(sample_windows(
+                &self.pddm,
+                &shift,
+                &cond,
+                prev.as_ref().map(|_| &cues),
+                &self.sample_opts(opts, opts.seed.wrapping_add(w as u64)),
+                device,
+                grad_device,
+            ));
+            out.extend_from_slice(&x);
+            prev = Some(x);
+        }
+        out
+    }
+
+    /// EDGE-style: half-overlapping windows in one batch, first halves overwritten each step.
+    fn edge(
+        &self,
+        music: &[f32],
+        frames: usize,
+        opts: &GenerateOptions,
+        device: &Device,
+        grad_device: &Device,
+    ) -> Vec<f32> {
+        let n = self.config.pddm.pddm.window;
+        let half = n / 2;
+        let l = frames.saturating_sub(half).div_ceil(half).max(1);
+        let prims: Vec<WindowPrimitives> = (0..l).map(|_| WindowPrimitives::empty(n)).collect();
+        let m = Self::music_windows(music, frames, n, half, l);
+        let cond = self.cond(m, &prims, opts.genre, device);
+        // One step at a time so the overwrite runs between steps.
+        let shift = self.shift();
+        let mut so = self.sample_opts(opts, opts.seed);
+        let ts = shift.strided(opts.steps);
+        so.steps = ts.len();
+        crate::sampler::sample_windows_with(
+            &self.pddm,
+            &shift,
+            &cond,
+            &so,
+            device,
+            grad_device,
+            |x| overwrite_first_halves_relative(x, half),
+        )
+        .into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .unwrap()
+    }
+}
+
+fn host(x: Tensor<3>) -> Vec<f32> {
+    x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
+}
+
+/// EDGE's long-form overwrite for window-relative roots: window `i`'s first half becomes
+/// window `i − 1`'s second half, re-based so its first frame's root x/y is 0.
+pub fn overwrite_first_halves_relative(x: Tensor<3>, half: usize) -> Tensor<3> {
+    let [l, n, _] = x.dims();
+    if l < 2 {
+        return x;
+    }
+    let src = x.clone().narrow(0, 0, l - 1).narrow(1, half, n - half);
+    let lo = ROOT_HORIZONTAL[0];
+    let root = src.clone().narrow(2, lo, 2);
+    let first = root.clone().narrow(1, 0, 1).expand([l - 1, n - half, 2]);
+    let rebased = Tensor::cat(
+        vec![
+            src.clone().narrow(2, 0, lo),
+            root - first,
+            src.narrow(2, lo + 2, DIMS - lo - 2),
+        ],
+        2,
+    );
+    let rest = Tensor::cat(
+        vec![
+            rebased,
+            x.clone().narrow(0, 1, l - 1).narrow(1, n - half, half),
+        ],
+        1,
+    );
+    Tensor::cat(vec![x.narrow(0, 0, 1), rest], 0)
+}
+
+/// Windows `[l, n, 151]` (normalised, window-relative root) → one sequence: window `w` starts
+/// `advance` frames after window `w − 1` (its first `n − advance` frames repeat the previous
+/// window's last ones and are skipped), placed so its first frame continues from the previous
+/// window's motion (the step between the two frames before the join is carried over).
+pub fn place_windows(windows: &[f32], n: usize, advance: usize) -> Vec<f32> {
+    let l = windows.len() / (n * DIMS);
+    let overlap = n - advance;
+    let mut out: Vec<f32> = Vec::with_capacity((n + (l.saturating_sub(1)) * advance) * DIMS);
+    let mut origin = [0f32; 2];
+    for w in 0..l {
+        let win = &windows[w * n * DIMS..(w + 1) * n * DIMS];
+        let skip = if w == 0 { 0 } else { overlap };
+        if w > 0 {
+            // Where this window's frame 0 sits: on the already placed frame it repeats, or one
+            // step after the last placed frame for disjoint windows.
+            let placed = out.len() / DIMS;
+            if overlap > 0 {
+                let f = placed - overlap;
+                for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+                    origin[k] = out[f * DIMS + c];
+                }
+            } else {
+                let last = &out[(placed - 1) * DIMS..placed * DIMS];
+                let before = &out[(placed.max(2) - 2) * DIMS..(placed.max(2) - 1) * DIMS];
+                for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+                    origin[k] = last[c] + (last[c] - before[c]);
+                }
+            }
+        }
+        for f in skip..n {
+            let mut fr = win[f * DIMS..(f + 1) * DIMS].to_vec();
+            for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+                fr[c] += origin[k];
+            }
+            out.extend(fr);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disjoint_windows_continue_the_root_path() {
+        let n = 8;
+        // Two windows walking +1 per frame in x, each relative to its own first frame.
+        let mut w = vec![0f32; 2 * n * DIMS];
+        for k in 0..2 {
+            for f in 0..n {
+                w[(k * n + f) * DIMS + 4] = f as f32;
+            }
+        }
+        let out = place_windows(&w, n, n);
+        let xs: Vec<f32> = out.chunks(DIMS).map(|f| f[4]).collect();
+        assert_eq!(xs, (0..16).map(|i| i as f32).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn overlapping_windows_skip_the_repeated_frames() {
+        let n = 8;
+        let mut w = vec![0f32; 2 * n * DIMS];
+        for k in 0..2 {
+            for f in 0..n {
+                w[(k * n + f) * DIMS + 4] = f as f32;
+                w[(k * n + f) * DIMS + 10] = (k * 4 + f) as f32;
+            }
+        }
+        let out = place_windows(&w, n, 4);
+        let xs: Vec<f32> = out.chunks(DIMS).map(|f| f[4]).collect();
+        assert_eq!(xs, (0..12).map(|i| i as f32).collect::<Vec<_>>());
+        let ys: Vec<f32> = out.chunks(DIMS).map(|f| f[10]).collect();
+        assert_eq!(ys, (0..12).map(|i| i as f32).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,134 @@
+//! Reverse PDDM process over a batch of windows (paper §3.4.1 and §3.4.6): start from the
+//! primitives plus noise, `d_T = d_p + κ √η_T z`, and step down with the network's x̂0, with
+//! classifier-free guidance on music + genre (both branches in one batched forward), optional
+//! penetration guidance on x̂0, and hard cues (the shared boundary frames) written after every
+//! step, as in training where those frames of `d_t` are the clean values.
+
+use dancegen_nn::burn;
+use dancegen_nn::diffusion::Conditioning;
+use dancegen_nn::diffusion::noise::SeededNoise;
+use dancegen_nn::diffusion::pddm::ResidualShift;
+
+use burn::tensor::{Device, Tensor};
+
+use crate::denoiser::{PddmCond, PddmDenoiser};
+use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
+
+/// Frames and channels fixed to known values after every step.
+#[derive(Clone, Debug)]
+pub struct HardCues {
+    /// `[B, T, 151]`.
+    pub values: Tensor<3>,
+    /// `[B, T, 151]`, 1 where fixed.
+    pub mask: Tensor<3>,
+}
+
+impl HardCues {
+    fn apply(&self, x: Tensor<3>) -> Tensor<3> {
+        self.values.clone() * self.mask.clone() + x * (self.mask.clone().neg() + 1.0)
+    }
+}
+
+/// How to run the reverse process.
+#[derive(Clone, Debug)]
+pub struct PddmSampleOptions {
+    /// Denoising steps (evenly strided over the trained `T`; Lodge++: 50 = all).
+    pub steps: usize,
+    /// Classifier-free guidance weight `w` of `x̂0 = x̂0_null + w (x̂0_cond − x̂0_null)`
+    /// (Lodge / EDGE: 2; 1 = conditional only, one forward per step).
+    pub guidance: f64,
+    /// Use the Foot Refine Block.
+    pub refine: bool,
+    /// Penetration guidance and the number of final steps it acts on.
+    pub penetration: Option<(PenetrationGuidance, usize)>,
+    pub seed: u64,
+}
+
+/// Samples `[B, T, 151]` windows (normalised) with `cues` written after every step.
+/// `grad_device` is the autodiff device used by the penetration guidance.
+pub fn sample_windows(
+    net: &PddmDenoiser,
+    shift: &ResidualShift,
+    cond: &PddmCond,
+    cues: Option<&HardCues>,
+    opts: &PddmSampleOptions,
+    device: &Device,
+    grad_device: &Device,
+) -> Tensor<3> {
+    sample_windows_with(
+        net,
+        shift,
+        cond,
+        opts,
+        device,
+        grad_device,
+        |d| match cues {
+            Some(c) => c.apply(d),
+            None => d,
+        },
+    )
+}
+
+/// [`sample_windows`] with any constraint `after_step` applied to the initial state and after
+/// every step (EDGE's long-form overwrite, hard cues).
+pub fn sample_windows_with(
+    net: &PddmDenoiser,
+    shift: &ResidualShift,
+    cond: &PddmCond,
+    opts: &PddmSampleOptions,
+    device: &Device,
+    grad_device: &Device,
+    after_step: impl Fn(Tensor<3>) -> Tensor<3>,
+) -> Tensor<3> {
+    let dims = cond.primitives.dims();
+    let b = dims[0];
+    let mut rng = SeededNoise::new(opts.seed);
+    let big_t = shift.steps();
+    let mut d = cond.primitives.clone()
+        + rng.tensor(dims, device) * (shift.kappa * shift.eta[big_t].sqrt());
+    d = after_step(d);
+    let guided = (opts.guidance - 1.0).abs() > 1e-9;
+    let doubled = guided.then(|| PddmCond {
+        music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
+        genre: [cond.genre.clone(), cond.genre.clone()].concat(),
+        primitives: Tensor::cat(vec![cond.primitives.clone(), cond.primitives.clone()], 0),
+        mask: Tensor::cat(vec![cond.mask.clone(), cond.mask.clone()], 0),
+    });
+    let keep: Vec<bool> = (0..2 * b).map(|i| i < b).collect();
+    let pairs = opts.penetration.map(|_| CapsulePairs::new());
+    let ts = shift.strided(opts.steps);
+    for (i, &t) in ts.iter().enumerate() {
+        let s = ts.get(i + 1).copied().unwrap_or(0);
+        let mut x0 = match &doubled {
+            None => {
+                let tt = vec![(t - 1) as f32; b];
+                net.forward(d.clone(), &tt, Conditioning::Full(cond), opts.refine)
+                    .refined
+            }
+            Some(c2) => {
+                let tt = vec![(t - 1) as f32; 2 * b];
+                let both = net
+                    .forward(
+                        Tensor::cat(vec![d.clone(), d.clone()], 0),
+                        &tt,
+                        Conditioning::Dropout {
+                            cond: c2,
+                            keep: &keep,
+                        },
+                        opts.refine,
+                    )
+                    .refined;
+                let c = both.clone().narrow(0, 0, b);
+                let u = both.narrow(0, b, b);
+                u.clone() + (c - u) * opts.guidance
+            }
+        };
+        if let (Some((g, last)), Some(p)) = (&opts.penetration, &pairs)
+            && ts.len() - i <= *last
+        {
+            x0 = guide(x0, &net.denorm, p, g, grad_device);
+        }
+        d = after_step(shift.step_to(d, x0, t, s, rng.tensor(dims, device)));
+    }
+    d
+}

@@ -1,0 +1,265 @@
+//! The Lodge++ inference path on a tiny randomly initialised model: every sampler produces the
+//! song's length of finite frames, hard cues hold exactly, and the penetration guidance lowers
+//! the capsule penetration energy of a pose with the forearm inside the chest.
+
+use dancegen_lodgepp::bundle::{BundleConfig, GptSection, MeanStd, SamplingDefaults, SoloModel};
+use dancegen_lodgepp::config::{ChoreoGptConfig, PddmConfig, PddmTable};
+use dancegen_lodgepp::layout::{DIMS, MAIN_DIMS, rot6d};
+use dancegen_lodgepp::library::PrimitiveLibrary;
+use dancegen_lodgepp::penetration::{CapsulePairs, PenetrationGuidance, guide, penetration_energy};
+use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
+use dancegen_lodgepp::sampler::{HardCues, PddmSampleOptions, sample_windows};
+use dancegen_lodgepp::{Device, inference_device};
+use dancegen_motion::rotation::Mat3;
+use dancegen_nn::autoencoder::MotionAutoencoderConfig;
+use dancegen_nn::burn::tensor::{Tensor, TensorData};
+use dancegen_nn::conv::ConvCodecConfig;
+use dancegen_nn::loss::FkSkeleton;
+use dancegen_nn::quant::QuantizerConfig;
+use dancegen_nn::quant::vq::EmaVqConfig;
+
+const WINDOW: usize = 32;
+
+/// A T-pose-ish frame: identity rotations, root at 0.9 m height (Z-up).
+fn rest_frame() -> Vec<f32> {
+    let mut f = vec![0f32; DIMS];
+    f[6] = 0.9;
+    let id = Mat3::IDENTITY.to_6d();
+    for j in 0..24 {
+        for k in 0..6 {
+            f[rot6d(j, k)] = id[k] as f32;
+        }
+    }
+    f
+}
+
+fn tiny_model(device: &Device) -> SoloModel {
+    let genres = vec!["a".to_string(), "b".to_string()];
+    let vqvae = MotionAutoencoderConfig::new(
+        ConvCodecConfig::new(MAIN_DIMS, MAIN_DIMS)
+            .with_width(16)
+            .with_depth(1)
+            .with_code_dim(8),
+        QuantizerConfig::Vq(EmaVqConfig::new(16, 8)),
+    );
+    let gpt = ChoreoGptConfig {
+        d_model: 16,
+        n_layers: 1,
+        n_heads: 2,
+        music_d: 12,
+        music_layers: 1,
+        music_heads: 2,
+        window_tokens: 16,
+        overlap_tokens: 4,
+        dropout: 0.0,
+    };
+    let mut pddm: PddmTable = toml::from_str("").unwrap();
+    pddm.pddm = PddmConfig {
+        d_model: 16,
+        n_layers: 1,
+        n_heads: 2,
+        d_ff: 32,
+        music_layers: 1,
+        dropout: 0.0,
+        foot_refine: true,
+        window: WINDOW,
+    };
+    pddm.shift.steps = 8;
+    pddm.genres = genres.clone();
+    pddm.use_discriminator = false;
+    // Raw = normalised (identity statistics) except heights etc. are fine for a smoke test.
+    let norm = MeanStd {
+        kind: "mean_std".into(),
+        mean: rest_frame().iter().map(|&v| f64::from(v)).collect(),
+        std: vec![0.1; DIMS],
+    };
+    let vqvae_norm = norm.clone();
+    // A library of real-looking clips: rest pose with a swinging elbow.
+    let motion: Vec<f32> = (0..200)
+        .flat_map(|t| {
+            let mut f = vec![0f32; DIMS];
+            f[rot6d(18, 0)] = (t as f32 * 0.3).sin();
+            f
+        })
+        .collect();
+    let library = PrimitiveLibrary::build([motion.as_slice()]);
+    assert!(!library.is_empty());
+    let config = BundleConfig {
+        kind: "lodgepp".into(),
+        name: "tiny".into(),
+        fps: 30.0,
+        genres: genres.clone(),
+        default_genre: "a".into(),
+        vqvae: vqvae.clone(),
+        gpt: GptSection {
+            gpt: gpt.clone(),
+            codes: 16,
+        },
+        pddm: pddm.clone(),
+        sampling: SamplingDefaults {
+            steps: 8,
+            penetration_steps: 2,
+            ..Default::default()
+        },
+    };
+    SoloModel {
+        dir: ".".into(),
+        vqvae: vqvae.init(device),
+        gpt: gpt.init(16, genres.len(), device),
+        pddm: pddm.init(&norm.mean, &norm.std, device).denoiser,
+        config,
+        vqvae_norm,
+        norm,
+        library,
+    }
+}
+
+#[test]
+fn every_sampler_dances_the_whole_song() {
+    let device = inference_device();
+    let grad = device.clone().autodiff();
+    let model = tiny_model(&device);
+    let frames = 150;
+    let music: Vec<f32> = (0..frames * 35)
+        .map(|i| ((i % 35) as f32 * 0.1).sin())
+        .collect();
+    let beats: Vec<usize> = (0..frames).step_by(12).collect();
+    for sampler in [Sampler::Lodgepp, Sampler::Autoregressive, Sampler::Edge] {
+        let mut opts = GenerateOptions::defaults(&model, 1, 3);
+        opts.sampler = sampler;
+        let d = model.generate(&music, &beats, &opts, &device, &grad);
+        assert_eq!(d.n_frames, frames, "{sampler:?}");
+        assert_eq!(d.frames.len(), frames * DIMS);
+        assert!(d.frames.iter().all(|v| v.is_finite()), "{sampler:?}");
+        let again = model.generate(&music, &beats, &opts, &device, &grad);
+        assert_eq!(
+            d.frames, again.frames,
+            "{sampler:?} is deterministic given the seed"
+        );
+        if sampler == Sampler::Lodgepp {
+            assert_eq!(d.windows, frames.div_ceil(WINDOW));
+        }
+    }
+}
+
+#[test]
+fn hard_cues_hold_exactly() {
+    let device = inference_device();
+    let grad = device.clone().autodiff();
+    let model = tiny_model(&device);
+    let (b, t) = (2, WINDOW);
+    let cond = dancegen_lodgepp::denoiser::PddmCond {
+        music: Tensor::zeros([b, t, 35], &device),
+        genre: vec![0, 1],
+        primitives: Tensor::zeros([b, t, DIMS], &device),
+        mask: Tensor::zeros([b, t, 1], &device),
+    };
+    let mut m = vec![0f32; b * t * DIMS];
+    let mut v = vec![0f32; b * t * DIMS];
+    for f in 0..4 {
+        for c in 0..DIMS {
+            m[f * DIMS + c] = 1.0;
+            v[f * DIMS + c] = 0.25 + c as f32 * 1e-3;
+        }
+    }
+    let cues = HardCues {
+        values: Tensor::from_data(TensorData::new(v.clone(), [b, t, DIMS]), &device),
+        mask: Tensor::from_data(TensorData::new(m.clone(), [b, t, DIMS]), &device),
+    };
+    let opts = PddmSampleOptions {
+        steps: 8,
+        guidance: 2.0,
+        refine: true,
+        penetration: None,
+        seed: 1,
+    };
+    let shift = model.config.pddm.shift.schedule();
+    let x = sample_windows(
+        &model.pddm,
+        &shift,
+        &cond,
+        Some(&cues),
+        &opts,
+        &device,
+        &grad,
+    );
+    let x: Vec<f32> = x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
+    for i in 0..x.len() {
+        if m[i] == 1.0 {
+            assert_eq!(x[i], v[i]);
+        }
+    }
+}
+
+#[test]
+fn penetration_guidance_pulls_the_forearm_out_of_the_chest() {
+    let device = inference_device();
+    let grad = device.clone().autodiff();
+    // Identity statistics: normalised = raw.
+    let denorm = dancegen_lodgepp::kinematics::Denormalize::from_mean_std(
+        &[0.0; DIMS],
+        &[1.0; DIMS],
+        &device,
+    );
+    let pairs = CapsulePairs::new();
+    let energy = |x: &Tensor<3>| -> f32 {
+        let j =
+            dancegen_lodgepp::kinematics::joints(denorm.apply(x.clone()), &FkSkeleton::smpl24())
+                .reshape([1, 24, 3]);
+        penetration_energy(pairs.depths(j)).into_scalar()
+    };
+    // The most penetrating of a grid of left shoulder / elbow bends about the body's vertical
+    // axis (arm swung in front of and into the chest).
+    let pose = |a: f64, b: f64| {
+        let mut f = rest_frame();
+        let bend = |angle: f64| Mat3::from_axis_angle([0.0, angle, 0.0]).to_6d();
+        for (j, r) in [(16usize, bend(a)), (18, bend(b))] {
+            for k in 0..6 {
+                f[rot6d(j, k)] = r[k] as f32;
+            }
+        }
+        f
+    };
+    let mut best = (0.0f32, rest_frame());
+    for i in -10..=10 {
+        for k in -10..=10 {
+            let f = pose(i as f64 * 0.3, k as f64 * 0.3);
+            let e = energy(&Tensor::from_data(
+                TensorData::new(f.clone(), [1, 1, DIMS]),
+                &device,
+            ));
+            if e > best.0 {
+                best = (e, f);
+            }
+        }
+    }
+    let f = best.1;
+    let x0 = Tensor::<3>::from_data(TensorData::new(f.clone(), [1, 1, DIMS]), &device);
+    let before = energy(&x0);
+    assert!(
+        before > 0.5,
+        "the constructed pose penetrates (energy {before})"
+    );
+    let g = PenetrationGuidance {
+        scale: 0.05,
+        iterations: 20,
+    };
+    let after_x = guide(x0.clone(), &denorm, &pairs, &g, &grad);
+    let after = energy(&after_x);
+    println!("penetration energy {before:.3} -> {after:.3}");
+    assert!(after < 0.5 * before, "{before} -> {after}");
+    // Only arm rotations moved.
+    let moved: Vec<f32> = after_x
+        .into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .unwrap();
+    for c in 0..DIMS {
+        let arm = [13usize, 14, 16, 17, 18, 19, 20, 21, 22, 23]
+            .iter()
+            .any(|&j| (rot6d(j, 0)..rot6d(j, 0) + 6).contains(&c));
+        if !arm {
+            assert_eq!(moved[c], f[c], "channel {c} is not an arm rotation");
+        }
+    }
+}
