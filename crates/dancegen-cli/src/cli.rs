@@ -31,6 +31,82 @@ pub enum Command {
     Eval(EvalArgs),
     /// Train a model from a TOML config (see examples/train/), or continue a run.
     Train(TrainArgs),
+    /// Build training sets: motion + music pairs (beat-warp pseudo-pairing, AIST++, FineDance).
+    #[command(subcommand)]
+    Dataset(DatasetCommand),
+    /// Generate a solo dance for a song (Lodge++; the bundled default model).
+    Generate(GenerateArgs),
+    /// Assemble a Lodge++ model directory from its three training runs.
+    Bundle(BundleArgs),
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerArg {
+    /// Lodge++: choreography network → primitives → all windows in parallel.
+    Lodgepp,
+    /// EDGE's long-form sampling (half-overlapping windows, no primitives), for comparison.
+    Edge,
+    /// Window after window, continuing the previous window (no choreography network).
+    Autoregressive,
+}
+
+#[derive(Args, Debug)]
+pub struct GenerateArgs {
+    /// Song (WAV, FLAC, OGG, MP3, ...); default: the bundled demo song.
+    pub song: Option<PathBuf>,
+    /// Output file, by extension: .glb .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres, Y-up,
+    /// 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Vec<PathBuf>,
+    /// Model directory (default: the bundled models/lodgepp-small).
+    #[arg(long, value_name = "DIR")]
+    pub model: Option<PathBuf>,
+    /// Dance genre (the model's list; default: the model's default genre).
+    #[arg(long)]
+    pub genre: Option<String>,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Denoising steps (default: the model's, 50).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Classifier-free guidance weight (default: the model's, 2).
+    #[arg(long)]
+    pub guidance: Option<f64>,
+    /// Start of the music to dance to (seconds).
+    #[arg(long)]
+    pub start: Option<f64>,
+    /// End of the music to dance to (seconds; default: the song's end).
+    #[arg(long)]
+    pub end: Option<f64>,
+    #[arg(long, value_enum, default_value_t = SamplerArg::Lodgepp)]
+    pub sampler: SamplerArg,
+    /// Switch off the Foot Refine Block (ablation).
+    #[arg(long)]
+    pub no_foot_refine: bool,
+    /// Switch off the penetration guidance (ablation).
+    #[arg(long)]
+    pub no_penetration_guidance: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct BundleArgs {
+    /// Finished `lodgepp_vqvae` run directory.
+    #[arg(long, value_name = "RUN")]
+    pub vqvae: PathBuf,
+    /// Finished `lodgepp_gpt` run directory.
+    #[arg(long, value_name = "RUN")]
+    pub gpt: PathBuf,
+    /// Finished `lodgepp_pddm` run directory.
+    #[arg(long, value_name = "RUN")]
+    pub pddm: PathBuf,
+    /// Model name written to model.toml.
+    #[arg(long, default_value = "lodgepp-small")]
+    pub name: String,
+    #[arg(long)]
+    pub default_genre: Option<String>,
+    /// Output model directory.
+    #[arg(short, long, value_name = "DIR")]
+    pub output: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -238,4 +314,48 @@ fn parse_fps(s: &str) -> Result<u32, String> {
             "{s} is not supported: use 30 (EDGE, Lodge, TCDiff) or 60 (FACT)"
         )),
     }
+}
+
+#[derive(Subcommand, Debug)]
+pub enum DatasetCommand {
+    /// Pair motion with music features into OUT/{motion,music}/ + OUT/manifest.json.
+    Build(DatasetBuildArgs),
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairingArg {
+    /// Time-warp each motion onto a song's beats (a pseudo-pairing, not ground truth).
+    Pseudo,
+    /// AIST++ layout under --root: motions/*.pkl, wav/<music id>.wav, splits/.
+    Aistpp,
+    /// FineDance layout under --root: motion/*.npy, music_wav/*.wav, label_json/*.json.
+    Finedance,
+}
+
+#[derive(Args, Debug)]
+pub struct DatasetBuildArgs {
+    /// Motion files or directories (.bvh, .pkl, .npz, .npy); BVH is retargeted to SMPL 24.
+    #[arg(long, num_args = 1.., value_name = "PATH")]
+    pub motion: Vec<PathBuf>,
+    /// Songs to pair the motions with (pseudo pairing).
+    #[arg(long, num_args = 1.., value_name = "SONG")]
+    pub music: Vec<PathBuf>,
+    /// Genre of every input (default: from the file names: AIST++ gXX codes, CMU 60/61 salsa).
+    #[arg(long, value_name = "NAME")]
+    pub genre: Option<String>,
+    /// Motion or song file names (without extension) to keep out of training.
+    #[arg(long = "hold-out", num_args = 1.., value_name = "STEM")]
+    pub hold_out: Vec<String>,
+    /// How motion and music are paired.
+    #[arg(long, value_enum, default_value_t = PairingArg::Pseudo)]
+    pub pairing: PairingArg,
+    /// Data set root for --pairing aistpp / finedance.
+    #[arg(long, value_name = "DIR")]
+    pub root: Option<PathBuf>,
+    /// Breaks exact ties between songs.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(short, long, value_name = "OUT_DIR")]
+    pub output: PathBuf,
 }

@@ -2,8 +2,11 @@
 
 mod cli;
 mod cmd_beats;
+mod cmd_bundle;
 mod cmd_convert;
+mod cmd_dataset;
 mod cmd_features;
+mod cmd_generate;
 mod cmd_render;
 mod cmd_train;
 mod demo;
@@ -29,6 +32,9 @@ fn main() -> std::process::ExitCode {
         cli::Command::Render(args) => cmd_render::run(args, cli.quiet),
         cli::Command::Eval(args) => eval::run(args, cli.quiet),
         cli::Command::Train(args) => cmd_train::run(args, cli.quiet),
+        cli::Command::Dataset(cmd) => cmd_dataset::run(cmd, cli.quiet),
+        cli::Command::Generate(args) => cmd_generate::run(args, cli.quiet),
+        cli::Command::Bundle(args) => cmd_bundle::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
