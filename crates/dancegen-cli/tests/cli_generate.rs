@@ -183,3 +183,67 @@ fn missing_model_files_are_named() {
     let e = stderr(&o);
     assert!(e.contains("model.toml") && e.contains("missing"), "{e}");
 }
+
+/// A 5-minute song (feelings + the start of escape_from_chaosland, 22.05 kHz mono WAV) danced
+/// to its full length: no NaNs, on stage, feet on the floor. Few denoising steps keep it quick;
+/// the long-form placement and stage keeping are what is tested.
+#[test]
+fn five_minute_song_full_length_on_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let wav = dir.path().join("five_minutes.wav");
+    let sr = 22050;
+    let mut samples = Vec::new();
+    for name in ["feelings.ogg", "escape_from_chaosland.ogg"] {
+        let src = dancegen_music::decode::AudioSource::File(
+            shared().join("data/music/sectoid").join(name),
+        );
+        let a = dancegen_music::load::load_many(&src, &[sr], |_| {}).unwrap();
+        samples.extend_from_slice(&a[0].samples);
+    }
+    samples.truncate(300 * sr as usize);
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: sr,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(&wav, spec).unwrap();
+    for s in &samples {
+        w.write_sample((s.clamp(-1.0, 1.0) * 32767.0) as i16)
+            .unwrap();
+    }
+    w.finalize().unwrap();
+    let out = dir.path().join("long.npy");
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        wav.to_str().unwrap(),
+        "--steps",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    let (t, j) = joints(&out);
+    assert_eq!(t, 9000);
+    assert!(j.iter().all(|v| v.is_finite()));
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for f in 0..t {
+        for (k, c) in [0usize, 2].into_iter().enumerate() {
+            lo[k] = lo[k].min(j[f * 72 + c]);
+            hi[k] = hi[k].max(j[f * 72 + c]);
+        }
+        let low = [7, 8, 10, 11]
+            .map(|k| j[(f * 24 + k) * 3 + 1])
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        assert!(low > -1e-4, "frame {f}: foot at {low}");
+    }
+    println!(
+        "root x {:.2}..{:.2} m, z {:.2}..{:.2} m",
+        lo[0], hi[0], lo[1], hi[1]
+    );
+    assert!(
+        lo.iter().chain(&hi).all(|v| v.abs() < 3.0),
+        "left the 6 m stage"
+    );
+}

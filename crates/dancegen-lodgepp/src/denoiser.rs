@@ -39,6 +39,9 @@ pub struct PddmCond {
     pub primitives: Tensor<3>,
     /// `[B, T, 1]`: 1 on frames that hold a primitive.
     pub mask: Tensor<3>,
+    /// The music already encoded by [`PddmDenoiser::encode_music`] (`[B, T, d]`): the music is
+    /// the same at every denoising step, so samplers encode it once.
+    pub music_encoded: Option<Tensor<3>>,
 }
 
 /// The network's two outputs.
@@ -113,7 +116,7 @@ enum Keep<'a> {
 
 impl PddmDenoiser {
     /// Encoded music `[B, T, d]`.
-    fn encode_music(&self, music: Tensor<3>) -> Tensor<3> {
+    pub fn encode_music(&self, music: Tensor<3>) -> Tensor<3> {
         let h = self.music_in.forward(music);
         let [_, t, d] = h.dims();
         let pos = sinusoidal(0, t, d, &h.device()).unsqueeze::<3>();
@@ -190,7 +193,10 @@ impl PddmDenoiser {
         let music = if keep_vec.iter().all(|&k| !k) {
             null
         } else {
-            let enc = self.encode_music(c.music.clone());
+            let enc = match &c.music_encoded {
+                Some(e) => e.clone(),
+                None => self.encode_music(c.music.clone()),
+            };
             if keep_vec.iter().all(|&k| k) {
                 enc
             } else {

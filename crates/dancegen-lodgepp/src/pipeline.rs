@@ -132,6 +132,7 @@ impl SoloModel {
                 f[c] = f[c] * scale[c] + shift[c];
             }
         }
+        keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         GeneratedDance {
             n_frames: out.len() / DIMS,
             frames: out,
@@ -178,6 +179,7 @@ impl SoloModel {
             genre: vec![genre; b],
             primitives: Tensor::from_data(TensorData::new(values, [b, n, DIMS]), device),
             mask: Tensor::from_data(TensorData::new(mask, [b, n, 1]), device),
+            music_encoded: None,
         }
     }
 
@@ -412,6 +414,43 @@ impl SoloModel {
     }
 }
 
+/// Half the side of the square (metres) the dancer's slow travel is kept in, so minutes of
+/// windows placed one after another cannot walk off a 6 m stage (fast steps still reach ~1 m
+/// beyond it).
+pub const STAGE_HALF_SIZE: f32 = 2.0;
+/// Gaussian σ (frames, 4 s at 30 fps) separating slow travel from dance steps.
+pub const STAGE_SMOOTHING_FRAMES: f64 = 120.0;
+
+/// Moves the root's horizontal path (raw frames `[T, 151]`) by the part of its slow travel
+/// (Gaussian-smoothed path) that lies outside the square `±half`: a smooth, low-frequency
+/// correction that leaves every step's shape as generated.
+pub fn keep_on_stage(frames: &mut [f32], half: f32, sigma: f64) {
+    let t = frames.len() / DIMS;
+    if t == 0 {
+        return;
+    }
+    let r = (3.0 * sigma).ceil() as i64;
+    let w: Vec<f64> = (-r..=r)
+        .map(|i| (-((i * i) as f64) / (2.0 * sigma * sigma)).exp())
+        .collect();
+    for &c in &ROOT_HORIZONTAL {
+        let x: Vec<f64> = (0..t).map(|f| f64::from(frames[f * DIMS + c])).collect();
+        for f in 0..t {
+            let (mut acc, mut norm) = (0.0, 0.0);
+            for (k, wk) in (-r..=r).zip(&w) {
+                let j = f as i64 + k;
+                if j >= 0 && (j as usize) < t {
+                    acc += wk * x[j as usize];
+                    norm += wk;
+                }
+            }
+            let centre = (acc / norm) as f32;
+            let outside = centre - centre.clamp(-half, half);
+            frames[f * DIMS + c] -= outside;
+        }
+    }
+}
+
 fn host(x: Tensor<3>) -> Vec<f32> {
     x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
 }
@@ -488,6 +527,27 @@ pub fn place_windows(windows: &[f32], n: usize, advance: usize) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_long_walk_stays_on_stage_and_keeps_its_steps() {
+        // 5 minutes walking 1 cm per frame in x, with a 10 cm side-step wiggle.
+        let t = 9000;
+        let mut f = vec![0f32; t * DIMS];
+        for i in 0..t {
+            f[i * DIMS + 4] = i as f32 * 0.01;
+            f[i * DIMS + 5] = 0.1 * (i as f32 * 0.3).sin();
+        }
+        let before = f.clone();
+        keep_on_stage(&mut f, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
+        let xs: Vec<f32> = f.chunks(DIMS).map(|r| r[4]).collect();
+        assert!(xs.iter().all(|x| x.abs() < 3.0), "max {}", xs.iter().fold(0f32, |a, b| a.max(b.abs())));
+        // Small-scale motion is untouched: the side-step wiggle is the same.
+        for i in 0..t {
+            assert!((f[i * DIMS + 5] - before[i * DIMS + 5]).abs() < 1e-6);
+        }
+        // Inside the square nothing moves.
+        assert_eq!(&f[..100 * DIMS], &before[..100 * DIMS]);
+    }
 
     #[test]
     fn disjoint_windows_continue_the_root_path() {

@@ -88,11 +88,20 @@ pub fn sample_windows_with(
         + rng.tensor(dims, device) * (shift.kappa * shift.eta[big_t].sqrt());
     d = after_step(d);
     let guided = (opts.guidance - 1.0).abs() > 1e-9;
+    let encoded = cond
+        .music_encoded
+        .clone()
+        .unwrap_or_else(|| net.encode_music(cond.music.clone()));
+    let cond = &PddmCond {
+        music_encoded: Some(encoded.clone()),
+        ..cond.clone()
+    };
     let doubled = guided.then(|| PddmCond {
         music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
         genre: [cond.genre.clone(), cond.genre.clone()].concat(),
         primitives: Tensor::cat(vec![cond.primitives.clone(), cond.primitives.clone()], 0),
         mask: Tensor::cat(vec![cond.mask.clone(), cond.mask.clone()], 0),
+        music_encoded: Some(Tensor::cat(vec![encoded.clone(), encoded], 0)),
     });
     let keep: Vec<bool> = (0..2 * b).map(|i| i < b).collect();
     let pairs = opts.penetration.map(|_| CapsulePairs::new());

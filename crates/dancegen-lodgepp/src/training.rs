@@ -165,6 +165,7 @@ pub fn pddm_loss(
         genre: genre.to_vec(),
         primitives: dp,
         mask,
+        music_encoded: None,
     };
     let tf: Vec<f32> = steps.iter().map(|&s| (s - 1) as f32).collect();
     let out = model.denoiser.forward(

@@ -153,6 +153,7 @@ fn hard_cues_hold_exactly() {
         genre: vec![0, 1],
         primitives: Tensor::zeros([b, t, DIMS], &device),
         mask: Tensor::zeros([b, t, 1], &device),
+        music_encoded: None,
     };
     let mut m = vec![0f32; b * t * DIMS];
     let mut v = vec![0f32; b * t * DIMS];
