@@ -110,7 +110,9 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     )?;
     pb.finish_and_clear();
     let total = feats.features.rows;
-    let song_seconds = total as f64 / f64::from(FPS);
+    // librosa-style framing has a frame at both ends (1 + samples / hop rows): a song of
+    // d seconds has d · 30 frame intervals, and the dance gets that many frames.
+    let song_seconds = total.saturating_sub(1) as f64 / f64::from(FPS);
     let start = args.start.unwrap_or(0.0);
     let end = args.end.unwrap_or(song_seconds).min(song_seconds);
     if !(start.is_finite() && end.is_finite() && start >= 0.0 && start < end) {
