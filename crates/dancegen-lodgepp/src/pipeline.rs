@@ -540,7 +540,11 @@ mod tests {
         let before = f.clone();
         keep_on_stage(&mut f, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         let xs: Vec<f32> = f.chunks(DIMS).map(|r| r[4]).collect();
-        assert!(xs.iter().all(|x| x.abs() < 3.0), "max {}", xs.iter().fold(0f32, |a, b| a.max(b.abs())));
+        assert!(
+            xs.iter().all(|x| x.abs() < 3.0),
+            "max {}",
+            xs.iter().fold(0f32, |a, b| a.max(b.abs()))
+        );
         // Small-scale motion is untouched: the side-step wiggle is the same.
         for i in 0..t {
             assert!((f[i * DIMS + 5] - before[i * DIMS + 5]).abs() < 1e-6);
