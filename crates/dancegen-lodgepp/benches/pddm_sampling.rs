@@ -4,8 +4,8 @@
 //! Model: the shipped small configuration, read from `configs/lodgepp_small_pddm.toml` `[model]`
 //! at run time (as `bench/solo_pddm.py` does; on 2026-11-22: d 192, 3 FiLM decoder layers,
 //! 6 heads, FF 384, 2 music encoder layers, 128-frame windows, Foot Refine Block on), random
-//! weights, identity normaliser, 10 genres. Both sides print their parameter count to stderr. Sampler:
-//! [`dancegen_lodgepp::sampler::sample_windows`], 50 residual-shift steps, guidance 2 (one
+//! weights, identity normaliser, 10 genres. Both sides print their parameter count to stderr.
+//! Sampler: [`dancegen_lodgepp::sampler::sample_windows`], 50 residual-shift steps, guidance 2 (one
 //! batched forward of `[cond; uncond]` = 2B windows per step), refine on, hard cues on the 4
 //! boundary frames at each window end (as the pipeline writes them). Batch = 128-frame windows:
 //! 8 for 1024 frames (34 s), 71 for 5 minutes (9000 frames).
