@@ -12,6 +12,7 @@
 //!   overwritten by window `i − 1`'s second half after every step.
 
 use dancegen_nn::burn;
+use dancegen_nn::diffusion::longform::{ChannelLayout, stitch};
 use dancegen_nn::diffusion::pddm::ResidualShift;
 use dancegen_nn::gpt::SamplingOptions;
 
@@ -106,24 +107,24 @@ impl SoloModel {
         let frames = music.len() / MUSIC_DIMS;
         assert!(frames > 0, "no music frames");
         let n = self.config.pddm.pddm.window;
-        let (windows, key_motions, advance) = match opts.sampler {
+        let (mut out, nwin, key_motions) = match opts.sampler {
             Sampler::Lodgepp => {
                 let (w, k) = self.lodgepp(music, beat_frames, frames, opts, device, grad_device);
-                (w, k, n)
+                (place_windows(&w, n, n), w.len() / (n * DIMS), k)
             }
-            Sampler::Autoregressive => (
-                self.autoregressive(music, frames, opts, device, grad_device),
-                0,
-                n - BOUNDARY_FRAMES,
-            ),
-            Sampler::Edge => (
-                self.edge(music, frames, opts, device, grad_device),
-                0,
-                n / 2,
-            ),
+            Sampler::Autoregressive => {
+                let w = self.autoregressive(music, frames, opts, device, grad_device);
+                (
+                    place_windows(&w, n, n - BOUNDARY_FRAMES),
+                    w.len() / (n * DIMS),
+                    0,
+                )
+            }
+            Sampler::Edge => {
+                let (placed, l) = self.edge(music, frames, opts, device, grad_device);
+                (placed, l, 0)
+            }
         };
-        let nwin = windows.len() / (n * DIMS);
-        let mut out = place_windows(&windows, n, advance);
         out.truncate(frames * DIMS);
         // Normalised → raw (the root's horizontal position has no mean: window-relative).
         let (scale, shift) = self.pddm.denorm.host();
@@ -378,7 +379,10 @@ impl SoloModel {
         out
     }
 
-    /// EDGE-style: half-overlapping windows in one batch, first halves overwritten each step.
+    /// EDGE-style: half-overlapping windows in one batch, first halves overwritten after every
+    /// step but the last (EDGE's `long_ddim_sample`), then EDGE's final stitching: positions
+    /// cross-faded and rotations slerped over each overlap (`dancegen_nn::diffusion::longform`).
+    /// Returns the placed frames (normalised units) and the window count.
     fn edge(
         &self,
         music: &[f32],
@@ -386,31 +390,61 @@ impl SoloModel {
         opts: &GenerateOptions,
         device: &Device,
         grad_device: &Device,
-    ) -> Vec<f32> {
+    ) -> (Vec<f32>, usize) {
         let n = self.config.pddm.pddm.window;
         let half = n / 2;
         let l = frames.saturating_sub(half).div_ceil(half).max(1);
         let prims: Vec<WindowPrimitives> = (0..l).map(|_| WindowPrimitives::empty(n)).collect();
         let m = Self::music_windows(music, frames, n, half, l);
         let cond = self.cond(m, &prims, opts.genre, device);
-        // One step at a time so the overwrite runs between steps.
-        let shift = self.shift();
-        let mut so = self.sample_opts(opts, opts.seed);
-        let ts = shift.strided(opts.steps);
-        so.steps = ts.len();
-        crate::sampler::sample_windows_with(
+        let mut win = host(crate::sampler::sample_windows_with(
             &self.pddm,
-            &shift,
+            &self.shift(),
             &cond,
-            &so,
+            &self.sample_opts(opts, opts.seed),
             device,
             grad_device,
-            |x| overwrite_first_halves_relative(x, half),
-        )
-        .into_data()
-        .convert::<f32>()
-        .try_to_vec::<f32>()
-        .unwrap()
+            |x, last| {
+                if last {
+                    x
+                } else {
+                    overwrite_first_halves_relative(x, half)
+                }
+            },
+        ));
+        // Window-relative roots → one path: window w starts where window w − 1 is at its
+        // middle frame (`win` already holds window w − 1 in global coordinates).
+        for w in 1..l {
+            let prev = (w - 1) * n + half;
+            let origin: Vec<f32> = ROOT_HORIZONTAL
+                .iter()
+                .map(|&c| win[prev * DIMS + c])
+                .collect();
+            for f in 0..n {
+                for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+                    win[(w * n + f) * DIMS + c] += origin[k];
+                }
+            }
+        }
+        // Stitch in raw units (slerp needs real rotations), then back to normalised units.
+        let (scale, shift) = self.pddm.denorm.host();
+        for fr in win.chunks_mut(DIMS) {
+            for c in 0..DIMS {
+                fr[c] = fr[c] * scale[c] + shift[c];
+            }
+        }
+        let raw = Tensor::<3>::from_data(TensorData::new(win, [l, n, DIMS]), device);
+        let mut out: Vec<f32> = stitch(raw, &ChannelLayout::edge151())
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .unwrap();
+        for fr in out.chunks_mut(DIMS) {
+            for c in 0..DIMS {
+                fr[c] = (fr[c] - shift[c]) / scale[c];
+            }
+        }
+        (out, l)
     }
 }
 

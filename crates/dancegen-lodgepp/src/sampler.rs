@@ -62,15 +62,16 @@ pub fn sample_windows(
         opts,
         device,
         grad_device,
-        |d| match cues {
+        |d, _| match cues {
             Some(c) => c.apply(d),
             None => d,
         },
     )
 }
 
-/// [`sample_windows`] with any constraint `after_step` applied to the initial state and after
-/// every step (EDGE's long-form overwrite, hard cues).
+/// [`sample_windows`] with any constraint `after_step(x, is_final)` applied to the initial state
+/// and after every step (EDGE's long-form overwrite, hard cues); `is_final` marks the result of
+/// the last step.
 pub fn sample_windows_with(
     net: &PddmDenoiser,
     shift: &ResidualShift,
@@ -78,7 +79,7 @@ pub fn sample_windows_with(
     opts: &PddmSampleOptions,
     device: &Device,
     grad_device: &Device,
-    after_step: impl Fn(Tensor<3>) -> Tensor<3>,
+    after_step: impl Fn(Tensor<3>, bool) -> Tensor<3>,
 ) -> Tensor<3> {
     let dims = cond.primitives.dims();
     let b = dims[0];
@@ -86,7 +87,7 @@ pub fn sample_windows_with(
     let big_t = shift.steps();
     let mut d = cond.primitives.clone()
         + rng.tensor(dims, device) * (shift.kappa * shift.eta[big_t].sqrt());
-    d = after_step(d);
+    d = after_step(d, false);
     let guided = (opts.guidance - 1.0).abs() > 1e-9;
     let encoded = cond
         .music_encoded
@@ -137,7 +138,7 @@ pub fn sample_windows_with(
         {
             x0 = guide(x0, &net.denorm, p, g, grad_device);
         }
-        d = after_step(shift.step_to(d, x0, t, s, rng.tensor(dims, device)));
+        d = after_step(shift.step_to(d, x0, t, s, rng.tensor(dims, device)), s == 0);
     }
     d
 }
