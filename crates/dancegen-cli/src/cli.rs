@@ -170,8 +170,8 @@ pub struct EvalArgs {
     #[arg(long)]
     pub fps: Option<f64>,
     /// Comma-separated metrics (default: all that the inputs allow; duet metrics by default only
-    /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,gmr,gmc,tif,fid_cd,div_cd,bed,
-    /// freeze,boundary_jerk.
+    /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,penetration,gmr,gmc,tif,
+    /// fid_cd,div_cd,bed,freeze,boundary_jerk.
     #[arg(long)]
     pub metrics: Option<String>,
     /// Beat-align-score variant.
