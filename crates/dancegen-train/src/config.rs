@@ -98,6 +98,9 @@ fn default_keep_checkpoints() -> usize {
     3
 }
 
+/// `[model]` keys that hold paths (resolved like `[data] paths`).
+pub const MODEL_PATH_KEYS: &[&str] = &["vqvae"];
+
 /// Per-frame vector the motion files are converted to (`dancegen_motion::repr`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -292,6 +295,15 @@ impl TrainConfig {
         }
         if let Some(m) = &mut c.data.manifest {
             *m = abs(m);
+        }
+        // Paths inside `[model]` (e.g. the VQ-VAE run a GPT trains on) are relative to this
+        // file too; resolved here so the run's own config copy (used by `--resume`) has them.
+        for key in MODEL_PATH_KEYS {
+            if let Some(toml::Value::String(p)) = c.model.get(*key) {
+                let resolved = abs(Path::new(p)).to_string_lossy().into_owned();
+                c.model
+                    .insert((*key).to_string(), toml::Value::String(resolved));
+            }
         }
         c.validate()?;
         Ok(c)

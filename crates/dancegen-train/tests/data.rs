@@ -191,3 +191,20 @@ fn config_errors_name_the_problem() {
         c
     );
 }
+
+#[test]
+fn model_paths_resolve_against_the_config_file_and_survive_the_run_copy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let c = parse(tmp.path(), |s| {
+        s.replace("[model]\n", "[model]\nvqvae = \"runs/my_vqvae\"\n")
+    })
+    .unwrap();
+    let want = tmp.path().join("runs/my_vqvae");
+    assert_eq!(
+        c.model.get("vqvae").and_then(|v| v.as_str()),
+        Some(want.to_str().unwrap())
+    );
+    // The run's config copy, read from elsewhere (as `--resume` does), keeps the same path.
+    let again = TrainConfig::parse(&c.to_toml(), Path::new("/elsewhere")).unwrap();
+    assert_eq!(again.model.get("vqvae"), c.model.get("vqvae"));
+}

@@ -182,6 +182,7 @@ impl GptTask {
         let mut table: GptTable = toml::Value::Table(config.model_params())
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
+        // `TrainConfig::parse` made `vqvae` absolute (relative to the config file).
         if table.vqvae.is_relative() {
             table.vqvae = path.parent().unwrap_or(Path::new(".")).join(&table.vqvae);
         }
