@@ -90,6 +90,26 @@ pub struct GeneratedDance {
 }
 
 impl SoloModel {
+    /// Normalised frames `[T, 151]` → raw, in place (window-relative root: no mean added).
+    fn to_raw(&self, frames: &mut [f32]) {
+        let (scale, shift) = self.pddm.denorm.host();
+        for f in frames.chunks_mut(DIMS) {
+            for c in 0..DIMS {
+                f[c] = f[c] * scale[c] + shift[c];
+            }
+        }
+    }
+
+    /// The inverse of [`SoloModel::to_raw`].
+    fn to_normalised(&self, frames: &mut [f32]) {
+        let (scale, shift) = self.pddm.denorm.host();
+        for f in frames.chunks_mut(DIMS) {
+            for c in 0..DIMS {
+                f[c] = (f[c] - shift[c]) / scale[c];
+            }
+        }
+    }
+
     fn shift(&self) -> ResidualShift {
         self.config.pddm.shift.schedule()
     }
@@ -127,12 +147,7 @@ impl SoloModel {
         };
         out.truncate(frames * DIMS);
         // Normalised → raw (the root's horizontal position has no mean: window-relative).
-        let (scale, shift) = self.pddm.denorm.host();
-        for f in out.chunks_mut(DIMS) {
-            for c in 0..DIMS {
-                f[c] = f[c] * scale[c] + shift[c];
-            }
-        }
+        self.to_raw(&mut out);
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         GeneratedDance {
             n_frames: out.len() / DIMS,
@@ -427,23 +442,14 @@ impl SoloModel {
             }
         }
         // Stitch in raw units (slerp needs real rotations), then back to normalised units.
-        let (scale, shift) = self.pddm.denorm.host();
-        for fr in win.chunks_mut(DIMS) {
-            for c in 0..DIMS {
-                fr[c] = fr[c] * scale[c] + shift[c];
-            }
-        }
+        self.to_raw(&mut win);
         let raw = Tensor::<3>::from_data(TensorData::new(win, [l, n, DIMS]), device);
         let mut out: Vec<f32> = stitch(raw, &ChannelLayout::edge151())
             .into_data()
             .convert::<f32>()
             .try_to_vec::<f32>()
             .unwrap();
-        for fr in out.chunks_mut(DIMS) {
-            for c in 0..DIMS {
-                fr[c] = (fr[c] - shift[c]) / scale[c];
-            }
-        }
+        self.to_normalised(&mut out);
         (out, l)
     }
 }

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use crate::config::{NormalizerKind, TrainConfig};
 use crate::data::{Batch, GenreManifest, Normalizer};
 use crate::task::{Losses, TrainTask};
-use crate::tasks::motion_autoencoder::MotionAutoencoderTask;
+use crate::tasks::motion_autoencoder::{MotionAutoencoderTask, autoencoder_losses};
 use crate::{TrainError, files};
 
 pub const VQVAE: &str = "lodgepp_vqvae";
@@ -109,19 +109,7 @@ impl TrainTask for VqvaeTask {
     }
 
     fn loss(&self, model: &MotionAutoencoder, batch: &Batch) -> Losses {
-        let l = model.loss(training::main_joints(batch.motion.clone()));
-        let mut parts = vec![
-            ("recon", l.recon),
-            ("velocity", l.velocity),
-            ("commit", l.commit),
-        ];
-        if let Some(p) = l.output.quant.perplexity {
-            parts.push(("perplexity", p));
-        }
-        Losses {
-            total: l.total,
-            parts,
-        }
+        autoencoder_losses(model, training::main_joints(batch.motion.clone()))
     }
 
     fn model_config(&self) -> toml::Table {

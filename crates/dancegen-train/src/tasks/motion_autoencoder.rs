@@ -144,22 +144,31 @@ impl TrainTask for MotionAutoencoderTask {
     }
 
     fn loss(&self, model: &MotionAutoencoder, batch: &Batch) -> Losses {
-        let l = model.loss(batch.motion.clone());
-        let mut parts = vec![
-            ("recon", l.recon),
-            ("velocity", l.velocity),
-            ("commit", l.commit),
-        ];
-        if let Some(p) = l.output.quant.perplexity {
-            parts.push(("perplexity", p));
-        }
-        Losses {
-            total: l.total,
-            parts,
-        }
+        autoencoder_losses(model, batch.motion.clone())
     }
 
     fn model_config(&self) -> toml::Table {
         self.table.clone()
+    }
+}
+
+/// The autoencoder's loss on `x` `[B, T, C]` with its logged parts (reconstruction, velocity,
+/// commitment, codebook perplexity where the quantizer has one).
+pub fn autoencoder_losses(
+    model: &MotionAutoencoder,
+    x: dancegen_nn::burn::tensor::Tensor<3>,
+) -> Losses {
+    let l = model.loss(x);
+    let mut parts = vec![
+        ("recon", l.recon),
+        ("velocity", l.velocity),
+        ("commit", l.commit),
+    ];
+    if let Some(p) = l.output.quant.perplexity {
+        parts.push(("perplexity", p));
+    }
+    Losses {
+        total: l.total,
+        parts,
     }
 }
