@@ -379,9 +379,17 @@ impl WindowDataset {
         for f in motion_files(&c.paths)? {
             let mut loaded = load_clips(&f, c)?;
             if let Some(g) = &genres {
-                let genre = g.genre_of(&f);
+                // Genre-conditioned models need every clip's genre: a clip missing from the
+                // manifest is a data error here, not a panic in the middle of training.
+                let genre = g.genre_of(&f).ok_or_else(|| TrainError::Data {
+                    path: f.clone(),
+                    reason: format!(
+                        "not listed in the manifest {} (rebuild the data set, or drop [data] manifest)",
+                        c.manifest.as_deref().unwrap_or(Path::new("?")).display()
+                    ),
+                })?;
                 for clip in &mut loaded {
-                    clip.genre = genre;
+                    clip.genre = Some(genre);
                 }
             }
             clips.extend(loaded);

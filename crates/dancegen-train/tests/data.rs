@@ -208,3 +208,24 @@ fn model_paths_resolve_against_the_config_file_and_survive_the_run_copy() {
     let again = TrainConfig::parse(&c.to_toml(), Path::new("/elsewhere")).unwrap();
     assert_eq!(again.model.get("vqvae"), c.model.get("vqvae"));
 }
+
+#[test]
+fn a_clip_missing_from_the_manifest_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let manifest = tmp.path().join("manifest.json");
+    std::fs::write(
+        &manifest,
+        r#"{"genres": ["salsa"], "clips": [{"name": "other_clip", "genre": "salsa"}]}"#,
+    )
+    .unwrap();
+    let c = parse(tmp.path(), |s| {
+        s.replace(
+            "[data]\n",
+            &format!("[data]\nmanifest = {:?}\n", manifest.to_str().unwrap()),
+        )
+    })
+    .unwrap();
+    let e = WindowDataset::read_clips(&c.data).unwrap_err().to_string();
+    assert!(e.contains("not listed in the manifest"), "{e}");
+    assert!(e.contains(".pkl"), "names the motion file: {e}");
+}
