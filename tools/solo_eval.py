@@ -125,9 +125,14 @@ def boundary_jerk_ratio(jerk, boundaries):
 
 
 def boundaries(sampler, window, frames):
-    """First frames of each new window in the placed sequence (pipeline::place_windows)."""
-    if sampler == "lodgepp":  # disjoint windows, advance n
-        first, step = window, window
+    """Frames where the placed sequence (pipeline::place_windows) changes source: the first
+    frame of each new window and, for the Lodge++ sampler, also the two frames where generated
+    frames meet the 4 + 4 shared boundary frames (window start + 4, previous window end − 4)."""
+    if sampler == "lodgepp":  # disjoint windows, advance n, cue seams at ±4
+        seams = []
+        for b in range(window, frames, window):
+            seams += [b - BOUNDARY_FRAMES, b, b + BOUNDARY_FRAMES]
+        return [b for b in seams if 0 < b < frames]
     elif sampler == "autoregressive":  # advance n − 4, the first 4 frames repeat the context
         first, step = window, window - BOUNDARY_FRAMES
     elif sampler == "edge":  # advance n / 2; window i's first half is window i − 1's second
@@ -372,11 +377,14 @@ def cmd_report(args):
       f"windows) and takes no window length, so the ratio is recomputed by "
       f"`tools/solo_eval.py` with the same definition "
       f"(`dancegen_metrics::longform::boundary_jerk_ratio`, ±{BOUNDARY_BAND}-frame band) at the "
-      f"frames where each sampler starts a new window: Lodge++ and its two ablations every "
-      f"{window} frames; autoregressive at {window}, then every {window - BOUNDARY_FRAMES} "
+      f"frames where each sampler's output changes source: Lodge++ and its two ablations at "
+      f"every {window}-frame window start and {BOUNDARY_FRAMES} frames either side of it "
+      f"(where the generated frames meet the shared boundary frames; the first report "
+      f"looked only at the window starts and missed 1 m root jumps at these seams); "
+      f"autoregressive at {window}, then every {window - BOUNDARY_FRAMES} "
       f"(each window repeats the previous one's last {BOUNDARY_FRAMES} frames); EDGE at "
       f"{window}, then every {window // 2} (half-overlapping windows). Real data is measured "
-      f"every {window} frames (it has no seams, so its value shows the metric's noise). "
+      f"at the Lodge++ seams (it has no seams, so its value shows the metric's noise). "
       f"Parity check: at 150-frame boundaries the helper reproduces `dancegen eval`'s "
       f"`boundary_jerk` on all {parity[1]} clips within {parity[0]:.1e} (relative).")
     w("- **Freezing**: share of 1-second windows whose mean joint speed is under 5 % of the "

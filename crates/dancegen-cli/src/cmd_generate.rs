@@ -164,6 +164,11 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     let dance = model.generate(&music, &beats, &opts, &device, &grad_device);
     let gen_secs = t_gen.elapsed().as_secs_f64();
     pb.finish_and_clear();
+    tracing::info!(
+        horizontal_m = dance.seam_correction.horizontal,
+        height_m = dance.seam_correction.height,
+        "largest root corrections where generated frames meet the shared boundary frames"
+    );
     let motion = to_smpl(&dance.frames)?;
 
     for (path, kind) in outputs.iter().zip(&kinds) {

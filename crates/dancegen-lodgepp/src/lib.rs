@@ -32,6 +32,7 @@ pub mod penetration;
 pub mod pipeline;
 pub mod primitives;
 pub mod sampler;
+pub mod seams;
 pub mod training;
 
 pub use dancegen_nn::burn::tensor::Device;

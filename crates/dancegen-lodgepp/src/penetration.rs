@@ -16,7 +16,7 @@ use dancegen_nn::loss::FkSkeleton;
 use burn::tensor::activation::sigmoid;
 use burn::tensor::{Device, Tensor, TensorData};
 
-use crate::kinematics::{Denormalize, joints};
+use crate::kinematics::{Denormalize, joints, joints_host};
 use crate::layout::{DIMS, rot6d};
 
 /// Points sampled on each source capsule's axis.
@@ -71,6 +71,32 @@ impl CapsulePairs {
 
     pub fn is_empty(&self) -> bool {
         self.radius.is_empty()
+    }
+
+    /// Whether any sampled point of the frame's joints `[24, 3]` (flat) is inside its target
+    /// capsule: [`CapsulePairs::depths`] > 0 for some pair, computed on the host.
+    pub fn any_inside(&self, joints: &[f32]) -> bool {
+        let at = |row: &[f32]| {
+            let mut p = [0f32; 3];
+            for (k, &w) in row.iter().enumerate() {
+                if w != 0.0 {
+                    for a in 0..3 {
+                        p[a] += w * joints[3 * k + a];
+                    }
+                }
+            }
+            p
+        };
+        (0..self.len()).any(|m| {
+            let rows = |v: &[f32]| at(&v[m * 24..(m + 1) * 24]);
+            let (p, a, b) = (rows(&self.point), rows(&self.seg_a), rows(&self.seg_b));
+            let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+            let len2 = (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]).max(1e-12);
+            let s = ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / len2).clamp(0.0, 1.0);
+            let d2: f32 = (0..3).map(|k| (ap[k] - ab[k] * s).powi(2)).sum();
+            d2.max(1e-12).sqrt() < self.radius[m]
+        })
     }
 
     /// Penetration depths `[N, M]` (positive inside) of world joints `[N, 24, 3]`.
@@ -165,19 +191,52 @@ pub fn guide(
         grad_device,
     );
     let skel = FkSkeleton::smpl24();
-    let mask = Tensor::<1>::from_data(TensorData::new(arm_channel_mask(), [DIMS]), &plain)
-        .reshape([1, 1, DIMS]);
-    let mut x = x0;
+    let mask = arm_channel_mask();
+    let window = t * DIMS;
+    let mut x = x0.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
     for _ in 0..g.iterations {
-        let xa = Tensor::<3>::from_data(x.clone().into_data(), grad_device).require_grad();
-        let j = joints(dn.apply(xa.clone()), &skel).reshape([b * t, 24, 3]);
+        // The energy's gradient is zero wherever no point is inside a capsule (the indicator of
+        // eq. 23), so only windows with a penetrating frame go through autodiff; most steps of
+        // most dances have none and cost one host FK.
+        let raw: Vec<f32> = x
+            .chunks_exact(DIMS)
+            .flat_map(|f| {
+                f.iter()
+                    .zip(&scale)
+                    .zip(&shift)
+                    .map(|((v, s), m)| v * s + m)
+            })
+            .collect();
+        let at = joints_host(&raw, &skel);
+        let active: Vec<usize> = (0..b)
+            .filter(|w| (w * t..(w + 1) * t).any(|f| pairs.any_inside(&at[f * 72..(f + 1) * 72])))
+            .collect();
+        if active.is_empty() {
+            break;
+        }
+        let sub: Vec<f32> = active
+            .iter()
+            .flat_map(|&w| x[w * window..(w + 1) * window].iter().copied())
+            .collect();
+        let n = active.len();
+        let xa =
+            Tensor::<3>::from_data(TensorData::new(sub, [n, t, DIMS]), grad_device).require_grad();
+        let j = joints(dn.apply(xa.clone()), &skel).reshape([n * t, 24, 3]);
         let energy = penetration_energy(pairs.depths(j));
         let grads = energy.backward();
         let Some(gx) = xa.grad(&grads) else { break };
-        let gx = Tensor::<3>::from_data(gx.into_data(), &plain);
-        x = x - gx * mask.clone() * g.scale;
+        let gx = gx.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
+        for (k, &w) in active.iter().enumerate() {
+            let rows = x[w * window..(w + 1) * window].chunks_exact_mut(DIMS);
+            for (f, row) in rows.enumerate() {
+                let grad = &gx[(k * t + f) * DIMS..(k * t + f + 1) * DIMS];
+                for ((v, d), m) in row.iter_mut().zip(grad).zip(&mask) {
+                    *v -= d * m * g.scale as f32;
+                }
+            }
+        }
     }
-    x
+    Tensor::<3>::from_data(TensorData::new(x, [b, t, DIMS]), &plain)
 }
 
 #[cfg(test)]

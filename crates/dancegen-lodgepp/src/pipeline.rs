@@ -27,6 +27,7 @@ use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::PenetrationGuidance;
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
+use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
 
 /// Which long-form sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,6 +88,8 @@ pub struct GeneratedDance {
     pub windows: usize,
     /// Key motions placed (Lodge++ sampler).
     pub key_motions: usize,
+    /// Largest root corrections at the cue seams, metres (`seams` module).
+    pub seam_correction: SeamCorrection,
 }
 
 impl SoloModel {
@@ -96,16 +99,6 @@ impl SoloModel {
         for f in frames.chunks_mut(DIMS) {
             for c in 0..DIMS {
                 f[c] = f[c] * scale[c] + shift[c];
-            }
-        }
-    }
-
-    /// The inverse of [`SoloModel::to_raw`].
-    fn to_normalised(&self, frames: &mut [f32]) {
-        let (scale, shift) = self.pddm.denorm.host();
-        for f in frames.chunks_mut(DIMS) {
-            for c in 0..DIMS {
-                f[c] = (f[c] - shift[c]) / scale[c];
             }
         }
     }
@@ -127,33 +120,45 @@ impl SoloModel {
         let frames = music.len() / MUSIC_DIMS;
         assert!(frames > 0, "no music frames");
         let n = self.config.pddm.pddm.window;
-        let (mut out, nwin, key_motions) = match opts.sampler {
+        // Windows come back normalised; the root's horizontal channels have no mean (they are
+        // window-relative), so raw windows can be anchored and placed in metres.
+        let anchored = |mut w: Vec<f32>, cues: Vec<CuedFrames>| {
+            self.to_raw(&mut w);
+            let c = anchor_windows(&mut w, n, &cues);
+            (w, c)
+        };
+        let (mut out, nwin, key_motions, seam_correction) = match opts.sampler {
             Sampler::Lodgepp => {
                 let (w, k) = self.lodgepp(music, beat_frames, frames, opts, device, grad_device);
-                (place_windows(&w, n, n), w.len() / (n * DIMS), k)
+                let l = w.len() / (n * DIMS);
+                let (w, c) = anchored(w, shared_boundary_cues(l));
+                (place_windows(&w, n, n), l, k, c)
             }
             Sampler::Autoregressive => {
                 let w = self.autoregressive(music, frames, opts, device, grad_device);
-                (
-                    place_windows(&w, n, n - BOUNDARY_FRAMES),
-                    w.len() / (n * DIMS),
-                    0,
-                )
+                let l = w.len() / (n * DIMS);
+                let cues = (0..l)
+                    .map(|i| CuedFrames {
+                        head: if i == 0 { 0 } else { BOUNDARY_FRAMES },
+                        tail: 0,
+                    })
+                    .collect();
+                let (w, c) = anchored(w, cues);
+                (place_windows(&w, n, n - BOUNDARY_FRAMES), l, 0, c)
             }
             Sampler::Edge => {
                 let (placed, l) = self.edge(music, frames, opts, device, grad_device);
-                (placed, l, 0)
+                (placed, l, 0, SeamCorrection::default())
             }
         };
         out.truncate(frames * DIMS);
-        // Normalised → raw (the root's horizontal position has no mean: window-relative).
-        self.to_raw(&mut out);
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         GeneratedDance {
             n_frames: out.len() / DIMS,
             frames: out,
             windows: nwin,
             key_motions,
+            seam_correction,
         }
     }
 
@@ -397,7 +402,7 @@ impl SoloModel {
     /// EDGE-style: half-overlapping windows in one batch, first halves overwritten after every
     /// step but the last (EDGE's `long_ddim_sample`), then EDGE's final stitching: positions
     /// cross-faded and rotations slerped over each overlap (`dancegen_nn::diffusion::longform`).
-    /// Returns the placed frames (normalised units) and the window count.
+    /// Returns the placed frames (raw units) and the window count.
     fn edge(
         &self,
         music: &[f32],
@@ -441,15 +446,14 @@ impl SoloModel {
                 }
             }
         }
-        // Stitch in raw units (slerp needs real rotations), then back to normalised units.
+        // Stitch in raw units (slerp needs real rotations); the result stays raw.
         self.to_raw(&mut win);
         let raw = Tensor::<3>::from_data(TensorData::new(win, [l, n, DIMS]), device);
-        let mut out: Vec<f32> = stitch(raw, &ChannelLayout::edge151())
+        let out: Vec<f32> = stitch(raw, &ChannelLayout::edge151())
             .into_data()
             .convert::<f32>()
             .try_to_vec::<f32>()
             .unwrap();
-        self.to_normalised(&mut out);
         (out, l)
     }
 }
@@ -460,6 +464,16 @@ impl SoloModel {
 pub const STAGE_HALF_SIZE: f32 = 2.0;
 /// Gaussian σ (frames, 4 s at 30 fps) separating slow travel from dance steps.
 pub const STAGE_SMOOTHING_FRAMES: f64 = 120.0;
+
+/// The cues of the Lodge++ sampler's `l` windows: every inner boundary's 4 + 4 shared frames.
+pub fn shared_boundary_cues(l: usize) -> Vec<CuedFrames> {
+    (0..l)
+        .map(|w| CuedFrames {
+            head: if w > 0 { BOUNDARY_FRAMES } else { 0 },
+            tail: if w + 1 < l { BOUNDARY_FRAMES } else { 0 },
+        })
+        .collect()
+}
 
 /// Moves the root's horizontal path (raw frames `[T, 151]`) by the part of its slow travel
 /// (Gaussian-smoothed path) that lies outside the square `±half`: a smooth, low-frequency

@@ -245,7 +245,27 @@ fn penetration_guidance_pulls_the_forearm_out_of_the_chest() {
         scale: 0.05,
         iterations: 20,
     };
-    let after_x = guide(x0.clone(), &denorm, &pairs, &g, &grad);
+    // A batch of [rest pose, penetrating pose]: the rest window has no point inside and must
+    // come back bit-identical, the other one is pulled out.
+    let rest = rest_frame();
+    let batch = Tensor::<3>::from_data(
+        TensorData::new([rest.clone(), f.clone()].concat(), [2, 1, DIMS]),
+        &device,
+    );
+    let both: Vec<f32> = guide(batch, &denorm, &pairs, &g, &grad)
+        .into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .unwrap();
+    assert_eq!(
+        &both[..DIMS],
+        rest.as_slice(),
+        "a window without penetration moved"
+    );
+    let after_x = Tensor::<3>::from_data(
+        TensorData::new(both[DIMS..].to_vec(), [1, 1, DIMS]),
+        &device,
+    );
     let after = energy(&after_x);
     println!("penetration energy {before:.3} -> {after:.3}");
     assert!(after < 0.5 * before, "{before} -> {after}");

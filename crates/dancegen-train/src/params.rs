@@ -146,6 +146,11 @@ impl<M: Module> Ema<M> {
         e
     }
 
+    /// The average restarted at `model`'s values.
+    pub fn reset(&mut self, model: &M) {
+        self.blend(model, 0.0);
+    }
+
     /// One update towards `model` (call after [`sync_running_states`]).
     pub fn update(&mut self, model: &M) {
         self.blend(model, self.decay);

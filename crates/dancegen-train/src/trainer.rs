@@ -326,10 +326,12 @@ fn run<T: TrainTask>(
         model = optim.step(lr, model, gp);
         sync_running_states(&model);
         step += 1;
-        if let (Some(e), Some(c)) = (&mut ema, &config.ema)
-            && step % c.every == 0
-        {
-            e.update(&model);
+        if let (Some(e), Some(c)) = (&mut ema, &config.ema) {
+            if step <= c.start {
+                e.reset(&model);
+            } else if step % c.every == 0 {
+                e.update(&model);
+            }
         }
         last_loss = losses.total.into_scalar::<f32>() as f64;
         loss_sum += last_loss;

@@ -257,3 +257,31 @@ fn checkpoint_round_trip_restores_everything_and_damage_is_named() {
         .to_string();
     assert!(e.contains("state.json") && e.contains("corrupt"), "{e}");
 }
+
+#[test]
+fn ema_is_a_copy_of_the_model_until_its_start_step() {
+    let tmp = tempfile::tempdir().unwrap();
+    let device = dancegen_nn::device::training();
+    let steps = 8;
+    let run = |name: &str, start: u64| {
+        let dir = tmp.path().join(name);
+        let text = common::tiny_config(&dir, steps, 5)
+            .replace("decay = 0.9\n", &format!("decay = 0.9\nstart = {start}\n"));
+        let c = TrainConfig::parse(&text, &dir).unwrap();
+        train(&task(&c), &c, &quiet(None)).unwrap();
+        let ck =
+            load_checkpoint(&task(&c), &c, &latest_checkpoint(&dir).unwrap(), &device).unwrap();
+        (tensors(&ck.model), tensors(ck.ema.as_ref().unwrap()))
+    };
+    // Copied through the last step: the average is the model.
+    let (model, ema) = run("copy", steps);
+    assert_bit_identical(&model, &ema);
+    // Averaged over the last two steps only: same model (the EMA does not feed back into
+    // training), an average that differs from it.
+    let (model2, ema2) = run("late", steps - 2);
+    assert_bit_identical(&model, &model2);
+    assert!(
+        ema2.iter().any(|(k, v)| v != &model2[k]),
+        "averaging after the start step changed nothing"
+    );
+}
