@@ -19,8 +19,10 @@ use burn::tensor::{Device, Tensor, TensorData};
 use crate::kinematics::{Denormalize, joints, joints_host};
 use crate::layout::{DIMS, rot6d};
 
-/// Points sampled on each source capsule's axis.
-pub const SAMPLES_PER_CAPSULE: usize = 4;
+/// Points sampled on each source capsule's axis: as many as the evaluation's penetration ratio
+/// measures (`dancegen_metrics::penetration::DEFAULT_SAMPLES_PER_SEGMENT`), so no point it
+/// counts lies between the points the guidance pushes.
+pub const SAMPLES_PER_CAPSULE: usize = 8;
 /// Width of the sigmoid of eq. 23 (metres of penetration depth).
 pub const DEPTH_SCALE: f64 = 0.01;
 /// SMPL joints whose rotations the guidance may change: collars 13/14, shoulders 16/17, elbows

@@ -24,7 +24,7 @@ use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
 use crate::denoiser::PddmCond;
 use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
 use crate::library::{key_of, relative_root, retrieval_channels};
-use crate::penetration::PenetrationGuidance;
+use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
@@ -315,10 +315,36 @@ impl SoloModel {
         let mut cue_v = vec![0f32; l * n * DIMS];
         let mut cue_m = vec![0f32; l * n * DIMS];
         let all_but_root = layout::all_but_root_horizontal();
+        let mut clips: Vec<f32> = (1..l)
+            .flat_map(|w| {
+                let at = (w * n).min(cf - half).max(half);
+                let mut clip = self.retrieve(&coarse, at - half);
+                relative_root(&mut clip, half);
+                clip
+            })
+            .collect();
+        // The boundary frames are written over the sampler's output after every step, so the
+        // penetration guidance cannot reach them there: they get the same number of guidance
+        // iterations once, before sampling.
+        if let (Some((g, steps)), false) = (&opts.penetration, clips.is_empty()) {
+            let all = PenetrationGuidance {
+                iterations: g.iterations * steps,
+                ..*g
+            };
+            let t = Tensor::<3>::from_data(
+                TensorData::new(clips, [l - 1, PRIMITIVE_FRAMES, DIMS]),
+                device,
+            );
+            clips = host(guide(
+                t,
+                &self.pddm.denorm,
+                &CapsulePairs::new(),
+                &all,
+                grad_device,
+            ));
+        }
         for w in 1..l {
-            let at = (w * n).min(cf - half).max(half);
-            let mut clip = self.retrieve(&coarse, at - half);
-            relative_root(&mut clip, half);
+            let clip = &clips[(w - 1) * PRIMITIVE_FRAMES * DIMS..w * PRIMITIVE_FRAMES * DIMS];
             prims[w].put(0, &clip[half * DIMS..], true);
             prims[w - 1].put(n - half, &clip[..half * DIMS], false);
             for f in 0..half {

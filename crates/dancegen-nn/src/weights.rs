@@ -8,14 +8,27 @@ use std::path::{Path, PathBuf};
 
 use burn::module::Module;
 use burn::store::{
-    ApplyResult, BurnToPyTorchAdapter, ModuleSnapshot, PyTorchToBurnAdapter, SafetensorsStore,
+    ApplyResult, BurnToPyTorchAdapter, FloatCastAdapter, HalfPrecisionAdapter, ModuleAdapter,
+    ModuleSnapshot, PyTorchToBurnAdapter, SafetensorsStore,
 };
+use burn::tensor::DType;
 
 /// How the tensors in a file are laid out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
     Burn,
     PyTorch,
+}
+
+/// How a saved file stores float weights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    F32,
+    /// Half precision for the layers burn-store's `HalfPrecisionAdapter` lists (linear,
+    /// embedding, convolution and normalisation weights); custom parameters (normaliser
+    /// statistics, learned null tokens, codebooks) stay F32. Halves a shipped model's size;
+    /// loading widens everything back to F32.
+    F16,
 }
 
 /// A checkpoint that cannot be loaded or saved.
@@ -51,10 +64,13 @@ pub fn load<M: Module + ModuleSnapshot>(
     if !path.is_file() {
         return Err(read("no such file".into()));
     }
+    // Any float width in the file (F16 bundles, F64 exports) becomes the models' F32.
+    let widen = FloatCastAdapter::to(DType::F32);
     let mut store = SafetensorsStore::from_file(path).allow_partial(true);
-    if layout == Layout::PyTorch {
-        store = store.with_from_adapter(PyTorchToBurnAdapter);
-    }
+    store = match layout {
+        Layout::PyTorch => store.with_from_adapter(PyTorchToBurnAdapter.chain(widen)),
+        Layout::Burn => store.with_from_adapter(widen),
+    };
     let result = model
         .load_from(&mut store)
         .map_err(|e| read(e.to_string()))?;
@@ -93,6 +109,17 @@ pub fn save<M: Module + ModuleSnapshot>(
     layout: Layout,
     metadata: &[(&str, &str)],
 ) -> Result<(), WeightsError> {
+    save_as(model, path, layout, metadata, Storage::F32)
+}
+
+/// [`save`] with the float storage chosen.
+pub fn save_as<M: Module + ModuleSnapshot>(
+    model: &M,
+    path: &Path,
+    layout: Layout,
+    metadata: &[(&str, &str)],
+    storage: Storage,
+) -> Result<(), WeightsError> {
     let write = |reason: String| WeightsError::Write {
         path: path.to_path_buf(),
         reason,
@@ -101,12 +128,86 @@ pub fn save<M: Module + ModuleSnapshot>(
     for (k, v) in metadata {
         store = store.metadata(*k, *v);
     }
-    if layout == Layout::PyTorch {
-        store = store.with_to_adapter(BurnToPyTorchAdapter);
-    }
+    store = match (layout, storage) {
+        (Layout::Burn, Storage::F32) => store,
+        (Layout::Burn, Storage::F16) => store.with_to_adapter(HalfPrecisionAdapter::new()),
+        (Layout::PyTorch, Storage::F32) => store.with_to_adapter(BurnToPyTorchAdapter),
+        (Layout::PyTorch, Storage::F16) => {
+            store.with_to_adapter(BurnToPyTorchAdapter.chain(HalfPrecisionAdapter::new()))
+        }
+    };
     model
         .save_into(&mut store)
         .map_err(|e| write(e.to_string()))?;
     let bytes = store.get_bytes().map_err(|e| write(e.to_string()))?;
     dancegen_io::write_atomic(path, |w| w.write_all(&bytes)).map_err(|e| write(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::module::Param;
+    use burn::nn::{Linear, LinearConfig};
+    use burn::tensor::{Tensor, TensorData};
+
+    #[derive(Module, Debug)]
+    struct Net {
+        linear: Linear,
+        stats: Param<Tensor<1>>,
+    }
+
+    fn net(seed_shift: f32) -> Net {
+        let device = crate::device::inference();
+        let mut linear = LinearConfig::new(64, 64).init(&device);
+        let w: Vec<f32> = (0..64 * 64)
+            .map(|i| ((i as f32) * 0.37 + seed_shift).sin())
+            .collect();
+        linear.weight =
+            Param::from_tensor(Tensor::from_data(TensorData::new(w, [64, 64]), &device));
+        let stats = Param::from_tensor(Tensor::from_data(
+            TensorData::new(vec![0.602_286_96f32, 0.887_855_3, 1e-5], [3]),
+            &device,
+        ));
+        Net { linear, stats }
+    }
+
+    fn values(t: Tensor<1>) -> Vec<f32> {
+        t.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
+    }
+
+    #[test]
+    fn half_precision_storage_halves_layers_and_keeps_custom_parameters_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let (full, half) = (
+            dir.path().join("f32.safetensors"),
+            dir.path().join("f16.safetensors"),
+        );
+        let model = net(0.0);
+        save(&model, &full, Layout::Burn, &[]).unwrap();
+        save_as(&model, &half, Layout::Burn, &[], Storage::F16).unwrap();
+        let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+        assert!(
+            size(&half) * 10 < size(&full) * 6,
+            "{} vs {}",
+            size(&half),
+            size(&full)
+        );
+
+        let loaded = load(net(1.0), &half, Layout::Burn).unwrap();
+        assert_eq!(values(loaded.stats.val()), values(model.stats.val()));
+        let a = values(loaded.linear.weight.val().reshape([64 * 64]));
+        let b = values(model.linear.weight.val().reshape([64 * 64]));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0f32, f32::max);
+        assert!(
+            worst > 0.0 && worst < 1e-3,
+            "f16 rounding of values in [-1, 1]: {worst}"
+        );
+        // F32 files still load bit-exactly.
+        let exact = load(net(1.0), &full, Layout::Burn).unwrap();
+        assert_eq!(values(exact.linear.weight.val().reshape([64 * 64])), b);
+    }
 }

@@ -362,6 +362,7 @@ pub fn assemble_bundle(
     let default_genre = default_genre
         .map(str::to_string)
         .unwrap_or_else(|| pddm.genres[0].clone());
+    let run_pddm = pddm.clone();
     let config = BundleConfig {
         kind: bundle::KIND.into(),
         name: name.into(),
@@ -370,7 +371,11 @@ pub fn assemble_bundle(
         default_genre,
         vqvae,
         gpt: GptSection { gpt, codes },
-        pddm,
+        // The bundle carries the denoiser only: the discriminator is a training-time critic.
+        pddm: PddmTable {
+            use_discriminator: false,
+            ..pddm
+        },
         sampling: SamplingDefaults::default(),
     };
 
@@ -395,13 +400,57 @@ pub fn assemble_bundle(
         dancegen_io::write_atomic(&dst, |w| w.write_all(&bytes))
             .map_err(|e| TrainError::io(&dst, e))
     };
-    copy(vqvae_run.join(files::WEIGHTS), bundle::files::VQVAE)?;
+    // Weights are re-saved in half precision (weights::Storage::F16) at half the size. The
+    // rounding (≤ 2^-11 relative) is enough to change which tokens the GPT's top-k sampling
+    // draws, so a seed gives another dance than the F32 weights would; docs/solo-eval.md
+    // measures the shipped (F16) bundle.
+    let dev = device::inference();
+    let wrap = |run: &Path| {
+        let p = run.join(files::WEIGHTS);
+        move |e: weights::WeightsError| config_error(&p, e.to_string())
+    };
+    let half = |run: &Path, to: &str, save: &dyn Fn(&Path) -> Result<(), weights::WeightsError>| {
+        save(&out.join(to)).map_err(wrap(run))
+    };
+    let vq_model = weights::load(
+        vq_task.init(&dev),
+        &vqvae_run.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(wrap(vqvae_run))?;
+    let gpt_model = weights::load(
+        config.gpt.gpt.init(codes, config.genres.len(), &dev),
+        &gpt_run.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(wrap(gpt_run))?;
+    let Normalizer::MeanStd { mean, std } = &normalizer else {
+        return Err(config_error(
+            pddm_run,
+            "the PDDM run's normaliser is not mean_std".into(),
+        ));
+    };
+    let mut pddm_model = weights::load(
+        run_pddm.init(mean, std, &dev),
+        &pddm_run.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(wrap(pddm_run))?;
+    pddm_model.discriminator = None;
+    let f16 = weights::Storage::F16;
+    half(vqvae_run, bundle::files::VQVAE, &|p| {
+        weights::save_as(&vq_model, p, Layout::Burn, &[], f16)
+    })?;
+    half(gpt_run, bundle::files::GPT, &|p| {
+        weights::save_as(&gpt_model, p, Layout::Burn, &[], f16)
+    })?;
+    half(pddm_run, bundle::files::PDDM, &|p| {
+        weights::save_as(&pddm_model, p, Layout::Burn, &[], f16)
+    })?;
     copy(
         vqvae_run.join(files::NORMALIZER),
         bundle::files::VQVAE_NORMALIZER,
     )?;
-    copy(gpt_run.join(files::WEIGHTS), bundle::files::GPT)?;
-    copy(pddm_run.join(files::WEIGHTS), bundle::files::PDDM)?;
     copy(pddm_run.join(files::NORMALIZER), bundle::files::NORMALIZER)?;
     let lp = out.join(bundle::files::LIBRARY);
     library
