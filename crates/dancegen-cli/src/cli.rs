@@ -86,6 +86,10 @@ pub struct GenerateArgs {
     /// Switch off the penetration guidance (ablation).
     #[arg(long)]
     pub no_penetration_guidance: bool,
+    /// Leave the root path as generated: no correction keeping the feet the model predicts as
+    /// planted in place (a post-processing step, not part of Lodge++).
+    #[arg(long)]
+    pub no_foot_lock: bool,
 }
 
 #[derive(Args, Debug)]

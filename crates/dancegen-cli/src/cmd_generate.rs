@@ -155,6 +155,9 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     if args.no_penetration_guidance {
         opts.penetration = None;
     }
+    if args.no_foot_lock {
+        opts.foot_lock = false;
+    }
     let pb = spinner(
         &format!("dancing {:.1} s of {label} ({genre_name})", end - start),
         quiet,

@@ -55,6 +55,9 @@ pub struct SamplingDefaults {
     pub penetration_steps: usize,
     /// Largest shift (frames) of a key motion onto the nearest music beat.
     pub max_beat_shift: usize,
+    /// Keep the feet the model predicts as planted in place (`dancegen_motion::foot_lock`;
+    /// not part of Lodge++).
+    pub foot_lock: bool,
 }
 
 impl Default for SamplingDefaults {
@@ -68,6 +71,7 @@ impl Default for SamplingDefaults {
             penetration_iterations: 2,
             penetration_steps: 10,
             max_beat_shift: 6,
+            foot_lock: true,
         }
     }
 }

@@ -22,7 +22,12 @@ use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
 use crate::denoiser::PddmCond;
-use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
+use crate::kinematics::joints_host;
+use crate::layout::{self, CONTACTS, DIMS, FEET, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
+use dancegen_motion::foot_lock::{Axes, height_contacts, planted_feet_offsets};
+use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
+use crate::foot_refine::CONTACT_HEIGHT;
+use dancegen_nn::loss::FkSkeleton;
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
@@ -49,6 +54,8 @@ pub struct GenerateOptions {
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub gpt: SamplingOptions,
     pub max_beat_shift: usize,
+    /// Post-processing: planted feet stay in place ([`lock_planted_feet`]).
+    pub foot_lock: bool,
 }
 
 impl GenerateOptions {
@@ -76,6 +83,7 @@ impl GenerateOptions {
                 seed,
             },
             max_beat_shift: s.max_beat_shift,
+            foot_lock: s.foot_lock,
         }
     }
 }
@@ -152,6 +160,9 @@ impl SoloModel {
             }
         };
         out.truncate(frames * DIMS);
+        if opts.foot_lock {
+            lock_planted_feet(&mut out);
+        }
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         GeneratedDance {
             n_frames: out.len() / DIMS,
@@ -490,6 +501,44 @@ impl SoloModel {
 pub const STAGE_HALF_SIZE: f32 = 2.0;
 /// Gaussian σ (frames, 4 s at 30 fps) separating slow travel from dance steps.
 pub const STAGE_SMOOTHING_FRAMES: f64 = 120.0;
+
+/// Moves the root's horizontal path (raw frames `[T, 151]`) so planted feet do not glide
+/// (`dancegen_motion::foot_lock`). A foot is planted where the model's contact channel says so
+/// or where it is near the floor: within the contact heights the Foot Refine Block uses (LODGE's
+/// labels, ankle 12 cm, toe 5 cm) of the height the supporting foot stands at
+/// ([`GroundMode::SupportFeet`], the floor `dancegen generate` puts the dance on).
+pub fn lock_planted_feet(frames: &mut [f32]) {
+    let skel = FkSkeleton::smpl24();
+    let joints = joints_host(frames, &skel);
+    let t = frames.len() / DIMS;
+    if t == 0 {
+        return;
+    }
+    let feet: Vec<f32> = (0..t)
+        .flat_map(|f| FEET.iter().flat_map(move |&j| (0..3).map(move |a| (f, j, a))))
+        .map(|(f, j, a)| joints[(f * 24 + j) * 3 + a])
+        .collect();
+    // The floor from a Y-up view of the joints (only heights matter to it).
+    let heights: Vec<f32> = joints
+        .chunks_exact(3)
+        .flat_map(|p| [0.0, p[2], 0.0])
+        .collect();
+    let floor = SmplMotion::ground_height(&heights, GroundMode::SupportFeet);
+    let near = height_contacts(&feet, FEET.len(), 2, floor, &CONTACT_HEIGHT);
+    let contact: Vec<f32> = frames
+        .chunks_exact(DIMS)
+        .flat_map(|f| f[CONTACTS].iter().copied())
+        .zip(near)
+        .map(|(label, low)| label.max(low))
+        .collect();
+    // Z-up: the root's horizontal channels are x and y.
+    let offsets = planted_feet_offsets(&feet, &contact, FEET.len(), Axes::Z_UP);
+    for (f, o) in frames.chunks_exact_mut(DIMS).zip(offsets) {
+        for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+            f[c] += o[k];
+        }
+    }
+}
 
 /// The cues of the Lodge++ sampler's `l` windows: every inner boundary's 4 + 4 shared frames.
 pub fn shared_boundary_cues(l: usize) -> Vec<CuedFrames> {
