@@ -22,17 +22,17 @@ use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
 use crate::denoiser::PddmCond;
+use crate::foot_refine::CONTACT_HEIGHT;
 use crate::kinematics::joints_host;
 use crate::layout::{self, CONTACTS, DIMS, FEET, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
-use dancegen_motion::foot_lock::{Axes, height_contacts, planted_feet_offsets};
-use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
-use crate::foot_refine::CONTACT_HEIGHT;
-use dancegen_nn::loss::FkSkeleton;
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
+use dancegen_motion::foot_lock::{Axes, height_contacts, planted_feet_offsets};
+use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
+use dancegen_nn::loss::FkSkeleton;
 
 /// Which long-form sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -515,7 +515,10 @@ pub fn lock_planted_feet(frames: &mut [f32]) {
         return;
     }
     let feet: Vec<f32> = (0..t)
-        .flat_map(|f| FEET.iter().flat_map(move |&j| (0..3).map(move |a| (f, j, a))))
+        .flat_map(|f| {
+            FEET.iter()
+                .flat_map(move |&j| (0..3).map(move |a| (f, j, a)))
+        })
         .map(|(f, j, a)| joints[(f * 24 + j) * 3 + a])
         .collect();
     // The floor from a Y-up view of the joints (only heights matter to it).

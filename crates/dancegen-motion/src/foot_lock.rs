@@ -27,7 +27,13 @@ pub fn contact_weight(c: f32) -> f32 {
 
 /// Contacts from geometry: 1 where foot `k` is less than `thresholds[k]` above `floor`, else 0
 /// (`[T, F]`, same layout as the contacts [`planted_feet_offsets`] takes).
-pub fn height_contacts(feet: &[f32], n_feet: usize, up: usize, floor: f32, thresholds: &[f32]) -> Vec<f32> {
+pub fn height_contacts(
+    feet: &[f32],
+    n_feet: usize,
+    up: usize,
+    floor: f32,
+    thresholds: &[f32],
+) -> Vec<f32> {
     assert_eq!(thresholds.len(), n_feet, "one threshold per foot");
     feet.chunks_exact(3)
         .enumerate()
@@ -59,13 +65,18 @@ impl Axes {
 /// feet planted at both of its ends (the one carrying the weight); its step is removed in
 /// proportion to its contact weight. Removing one foot's step rather than the mean of all
 /// planted feet keeps it exactly still when the model plants feet that move apart.
-pub fn planted_feet_offsets(feet: &[f32], contact: &[f32], n_feet: usize, axes: Axes) -> Vec<[f32; 2]> {
-    let frames = if n_feet == 0 {
-        0
-    } else {
-        contact.len() / n_feet
-    };
-    assert_eq!(feet.len(), frames * n_feet * 3, "feet and contacts disagree");
+pub fn planted_feet_offsets(
+    feet: &[f32],
+    contact: &[f32],
+    n_feet: usize,
+    axes: Axes,
+) -> Vec<[f32; 2]> {
+    let frames = contact.len().checked_div(n_feet).unwrap_or(0);
+    assert_eq!(
+        feet.len(),
+        frames * n_feet * 3,
+        "feet and contacts disagree"
+    );
     let at = |t: usize, k: usize, axis: usize| feet[(t * n_feet + k) * 3 + axis];
     let mut out = vec![[0f32; 2]; frames];
     for t in 1..frames {
@@ -109,7 +120,10 @@ mod tests {
             let planted = feet[f * 6] + off[f][0];
             let swing = feet[f * 6 + 3] + off[f][0];
             assert!(planted.abs() < 1e-6, "frame {f}: planted foot at {planted}");
-            assert!((swing - 0.05 * f as f32).abs() < 1e-6, "frame {f}: swing {swing}");
+            assert!(
+                (swing - 0.05 * f as f32).abs() < 1e-6,
+                "frame {f}: swing {swing}"
+            );
             assert_eq!(off[f][1], 0.0);
         }
     }
@@ -145,7 +159,10 @@ mod tests {
         }
         let off = planted_feet_offsets(&feet, &vec![1.0; t * 2], 2, Axes::Z_UP);
         for (f, o) in off.iter().enumerate() {
-            assert!((o[0] + 0.03 * f as f32).abs() < 1e-6 && o[1].abs() < 1e-6, "{o:?}");
+            assert!(
+                (o[0] + 0.03 * f as f32).abs() < 1e-6 && o[1].abs() < 1e-6,
+                "{o:?}"
+            );
         }
     }
 }
