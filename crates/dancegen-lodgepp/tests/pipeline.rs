@@ -284,3 +284,65 @@ fn penetration_guidance_pulls_the_forearm_out_of_the_chest() {
         }
     }
 }
+
+#[test]
+fn foot_lock_holds_a_planted_foot_of_a_gliding_body() {
+    // A standing body whose root glides 2 cm per frame along x (Z-up), left foot labelled
+    // planted, right foot lifted (knee bent) and labelled free.
+    let t = 20;
+    let mut frames = Vec::with_capacity(t * DIMS);
+    for f in 0..t {
+        let mut fr = rest_frame();
+        fr[4] = 0.02 * f as f32;
+        fr[0] = 1.0; // left ankle contact label
+        fr[2] = 1.0; // left toe
+        let knee = Mat3::from_axis_angle([1.2, 0.0, 0.0]).to_6d();
+        for k in 0..6 {
+            fr[rot6d(5, k)] = knee[k] as f32;
+        }
+        frames.extend(fr);
+    }
+    let skel = FkSkeleton::smpl24();
+    let foot = |frames: &[f32], f: usize, j: usize| {
+        let all = dancegen_lodgepp::kinematics::joints_host(frames, &skel);
+        [all[(f * 24 + j) * 3], all[(f * 24 + j) * 3 + 1]]
+    };
+    let before_right: Vec<[f32; 2]> = (0..t).map(|f| foot(&frames, f, 8)).collect();
+    dancegen_lodgepp::pipeline::lock_planted_feet(&mut frames);
+    let left0 = foot(&frames, 0, 7);
+    for f in 0..t {
+        let l = foot(&frames, f, 7);
+        assert!(
+            (l[0] - left0[0]).abs() < 1e-5 && (l[1] - left0[1]).abs() < 1e-5,
+            "frame {f}: planted left ankle moved to {l:?} from {left0:?}"
+        );
+        // The lifted right foot moves with the body: its glide relative to the held foot is
+        // gone too, since nothing else moved.
+        let r = foot(&frames, f, 8);
+        assert!((r[0] - (before_right[f][0] - 0.02 * f as f32)).abs() < 1e-5);
+    }
+    // No contact labels: the foot at the support height still counts as planted (geometry);
+    // once the body is in the air (feet 40 cm up from frame 10) its glide is left alone.
+    let mut jump = Vec::with_capacity(t * DIMS);
+    for f in 0..t {
+        let mut fr = rest_frame();
+        fr[4] = 0.02 * f as f32;
+        fr[6] = if f < 10 { 0.9 } else { 1.3 };
+        jump.extend(fr);
+    }
+    dancegen_lodgepp::pipeline::lock_planted_feet(&mut jump);
+    let x = |f: usize| jump[f * DIMS + 4];
+    for f in 1..10 {
+        assert!(
+            (x(f) - x(0)).abs() < 1e-5,
+            "frame {f}: standing foot glides ({})",
+            x(f)
+        );
+    }
+    for f in 11..t {
+        assert!(
+            (x(f) - x(f - 1) - 0.02).abs() < 1e-5,
+            "frame {f}: in the air, glide kept"
+        );
+    }
+}
