@@ -194,12 +194,12 @@ pub fn guide(
     );
     let skel = FkSkeleton::smpl24();
     let mask = arm_channel_mask();
-    let window = t * DIMS;
     let mut x = x0.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
     for _ in 0..g.iterations {
-        // The energy's gradient is zero wherever no point is inside a capsule (the indicator of
-        // eq. 23), so only windows with a penetrating frame go through autodiff; most steps of
-        // most dances have none and cost one host FK.
+        // Every frame's energy depends on that frame alone (FK and the capsule depths are per
+        // frame), and its gradient is zero unless a point is inside a capsule (the indicator of
+        // eq. 23). So only the penetrating frames go through autodiff, as a batch of one-frame
+        // windows; most steps of most dances have none and cost one host FK.
         let raw: Vec<f32> = x
             .chunks_exact(DIMS)
             .flat_map(|f| {
@@ -210,31 +210,29 @@ pub fn guide(
             })
             .collect();
         let at = joints_host(&raw, &skel);
-        let active: Vec<usize> = (0..b)
-            .filter(|w| (w * t..(w + 1) * t).any(|f| pairs.any_inside(&at[f * 72..(f + 1) * 72])))
+        let active: Vec<usize> = (0..b * t)
+            .filter(|&f| pairs.any_inside(&at[f * 72..(f + 1) * 72]))
             .collect();
         if active.is_empty() {
             break;
         }
         let sub: Vec<f32> = active
             .iter()
-            .flat_map(|&w| x[w * window..(w + 1) * window].iter().copied())
+            .flat_map(|&f| x[f * DIMS..(f + 1) * DIMS].iter().copied())
             .collect();
         let n = active.len();
         let xa =
-            Tensor::<3>::from_data(TensorData::new(sub, [n, t, DIMS]), grad_device).require_grad();
-        let j = joints(dn.apply(xa.clone()), &skel).reshape([n * t, 24, 3]);
+            Tensor::<3>::from_data(TensorData::new(sub, [n, 1, DIMS]), grad_device).require_grad();
+        let j = joints(dn.apply(xa.clone()), &skel).reshape([n, 24, 3]);
         let energy = penetration_energy(pairs.depths(j));
         let grads = energy.backward();
         let Some(gx) = xa.grad(&grads) else { break };
         let gx = gx.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
-        for (k, &w) in active.iter().enumerate() {
-            let rows = x[w * window..(w + 1) * window].chunks_exact_mut(DIMS);
-            for (f, row) in rows.enumerate() {
-                let grad = &gx[(k * t + f) * DIMS..(k * t + f + 1) * DIMS];
-                for ((v, d), m) in row.iter_mut().zip(grad).zip(&mask) {
-                    *v -= d * m * g.scale as f32;
-                }
+        for (k, &f) in active.iter().enumerate() {
+            let row = &mut x[f * DIMS..(f + 1) * DIMS];
+            let grad = &gx[k * DIMS..(k + 1) * DIMS];
+            for ((v, d), m) in row.iter_mut().zip(grad).zip(&mask) {
+                *v -= d * m * g.scale as f32;
             }
         }
     }
