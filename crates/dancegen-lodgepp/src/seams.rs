@@ -1,17 +1,24 @@
-//! Root continuity where a window's generated frames meet its hard cues.
+//! Continuity where a window's generated frames meet its hard cues (not part of Lodge++).
 //!
-//! The sampler writes the shared boundary frames into every window after each step, but the
-//! network's root position for the frames it generates is only as good as its training: the
-//! denoiser sees positions through rotary attention alone, so it has no absolute notion of
-//! "window frame 0", and the small shipped model places its generated root with an offset from
-//! the cued frames (measured on the first bundled model: ~1.2 m horizontal jumps four frames
-//! into every window, and height steps of ~5 cm). The root's horizontal position is
-//! translation-invariant, so a constant shift of a window's generated frames onto the path its
-//! cued frames set is exact for the dance; height has cues at both ends and gets a linear ramp
-//! between the two seam offsets. Rotations are not touched. [`anchor_windows`] reports the
-//! corrections so the evaluation can show how large they are.
+//! The sampler writes the shared boundary frames into every window after each step. Lodge++
+//! relies on the network continuing them; the small shipped model does not. It sees positions
+//! only through rotary attention, so it has no notion of "window frame 0". Measured on the
+//! bundled model: its generated root sat ~1.2 m from the cued frames four frames into every
+//! window, and joint jerk at the seams was 4-6x the rest of the dance. So, per window:
+//! - Root, horizontal: the generated frames are translated onto the path the cued frames set
+//!   (exact for the dance: horizontal position is translation-invariant). The cued frames'
+//!   velocity then hands over to the generated one over [`BLEND_FRAMES`].
+//! - Root height: cued at both ends, so it gets a linear ramp between the two seam offsets.
+//! - Joint rotations: the generated rotation next to each seam is turned onto the
+//!   continuation of the cued ones, and the turn fades out over [`BLEND_FRAMES`] along the
+//!   geodesic.
+//!
+//! [`anchor_windows`] reports the root corrections, so the evaluation can show how large they
+//! are.
 
-use crate::layout::{DIMS, ROOT_HEIGHT, ROOT_HORIZONTAL};
+use dancegen_motion::rotation::Mat3;
+
+use crate::layout::{DIMS, ROOT_HEIGHT, ROOT_HORIZONTAL, rot6d};
 
 /// How many leading and trailing frames of a window were hard cues. The trailing cues never
 /// include the root's horizontal position (see [`crate::pipeline`]).
@@ -61,16 +68,32 @@ pub fn anchor_windows(windows: &mut [f32], n: usize, cues: &[CuedFrames]) -> Sea
         if head + tail >= n {
             continue;
         }
-        // Horizontal: one shift for the generated frames.
+        // Horizontal: the generated frames are shifted onto the path of the cued frames, and
+        // the cued frames' velocity hands over to the generated one over BLEND_FRAMES.
         for &c in &ROOT_HORIZONTAL {
             let at = |f: usize| win[f * DIMS + c];
-            let shift = if head == 0 {
-                -at(0)
+            if head == 0 {
+                let shift = -at(0);
+                for f in 0..n {
+                    win[f * DIMS + c] += shift;
+                }
+                worst.horizontal = worst.horizontal.max(shift.abs());
+                continue;
+            }
+            let (cue, gen_first) = (head - 1, head);
+            let v_cue = if cue >= 1 { at(cue) - at(cue - 1) } else { 0.0 };
+            let v_gen = if gen_first + 1 < n {
+                at(gen_first + 1) - at(gen_first)
             } else {
-                expected(at, head - 1, head, n) - at(head)
+                0.0
             };
-            for f in head..n {
-                win[f * DIMS + c] += shift;
+            let shift = at(cue) + v_cue - at(gen_first);
+            let mut extra = 0.0;
+            for (k, f) in (gen_first..n).enumerate() {
+                if k > 0 && k < BLEND_FRAMES {
+                    extra += (v_cue - v_gen) * fade(k);
+                }
+                win[f * DIMS + c] += shift + extra;
             }
             worst.horizontal = worst.horizontal.max(shift.abs());
         }
@@ -94,25 +117,100 @@ pub fn anchor_windows(windows: &mut [f32], n: usize, cues: &[CuedFrames]) -> Sea
             win[f * DIMS + ROOT_HEIGHT] += off_head * (1.0 - a) + off_tail * a;
         }
         worst.height = worst.height.max(off_head.abs()).max(off_tail.abs());
+        blend_rotation_seams(win, n, head, tail);
     }
     worst
+}
+
+/// Generated frames over which a seam's offset fades out: one primitive (8 frames, 0.27 s), so
+/// a pose the model meant to reach a little after the cue is still reached.
+pub const BLEND_FRAMES: usize = 8;
+
+/// Raised-cosine weight of generated frame `k` after a seam: 1 at the seam, 0 from
+/// [`BLEND_FRAMES`] on, flat at both ends.
+fn fade(k: usize) -> f32 {
+    if k >= BLEND_FRAMES {
+        return 0.0;
+    }
+    0.5 + 0.5 * (std::f32::consts::PI * k as f32 / BLEND_FRAMES as f32).cos()
+}
+
+fn rotation(win: &[f32], f: usize, j: usize) -> Mat3 {
+    let c = rot6d(j, 0);
+    let d: [f64; 6] = std::array::from_fn(|k| f64::from(win[f * DIMS + c + k]));
+    Mat3::from_6d(&d)
+}
+
+fn set_rotation(win: &mut [f32], f: usize, j: usize, r: &Mat3) {
+    let c = rot6d(j, 0);
+    for (k, v) in r.to_6d().iter().enumerate() {
+        win[f * DIMS + c + k] = *v as f32;
+    }
+}
+
+/// Every joint's generated rotations next to a seam are turned towards the continuation of the
+/// cued rotations (the cued frames' last rotation advanced by their own last step), the turn
+/// fading out over [`BLEND_FRAMES`]. Turning along the geodesic keeps every frame a rotation;
+/// blending 6D vectors linearly can pass near degenerate ones when the two sides disagree.
+fn blend_rotation_seams(win: &mut [f32], n: usize, head: usize, tail: usize) {
+    let (first, last) = (head, n - tail - 1);
+    // (cued frame next to the seam, the cued frame before it if any, generated frames outward)
+    let mut seams: Vec<(usize, Option<usize>, Vec<usize>)> = Vec::new();
+    if head > 0 {
+        let before = (head >= 2).then(|| head - 2);
+        seams.push((
+            head - 1,
+            before,
+            (first..=last).take(BLEND_FRAMES).collect(),
+        ));
+    }
+    if tail > 0 {
+        let c = n - tail;
+        let before = (c + 1 < n).then_some(c + 1);
+        seams.push((c, before, (first..=last).rev().take(BLEND_FRAMES).collect()));
+    }
+    for j in 0..24 {
+        for (cue, before, frames) in &seams {
+            let rc = rotation(win, *cue, j);
+            let step = before.map_or(Mat3::IDENTITY, |b| rc.mul(&rotation(win, b, j).transpose()));
+            let target = step.mul(&rc);
+            let offset = target.mul(&rotation(win, frames[0], j).transpose());
+            let aa = offset.to_axis_angle();
+            for (k, &f) in frames.iter().enumerate() {
+                let w = f64::from(fade(k));
+                let turn = Mat3::from_axis_angle([aa[0] * w, aa[1] * w, aa[2] * w]);
+                let r = turn.mul(&rotation(win, f, j));
+                set_rotation(win, f, j, &r);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A window whose root walks 0.1 per frame in x and bobs in height, then has its generated
-    /// frames (from `head`) displaced.
+    /// Joint whose rotation turns steadily in [`walking`].
+    const TURNING: usize = 2;
+
+    /// A window whose root walks 0.1 per frame in x and bobs in height, every joint at rest
+    /// except [`TURNING`], which turns 0.05 rad per frame about z.
     fn walking(n: usize) -> Vec<f32> {
         let mut w = vec![0f32; n * DIMS];
         for f in 0..n {
             w[f * DIMS + ROOT_HORIZONTAL[0]] = 0.1 * f as f32;
             w[f * DIMS + ROOT_HORIZONTAL[1]] = -0.05 * f as f32;
             w[f * DIMS + ROOT_HEIGHT] = 1.0 + 0.005 * (f as f32 * 0.7).sin();
-            w[f * DIMS + 20] = f as f32; // a rotation channel: must stay as it is
+            for j in 0..24 {
+                let angle = if j == TURNING { 0.05 * f as f64 } else { 0.0 };
+                set_rotation(&mut w, f, j, &Mat3::from_axis_angle([0.0, 0.0, angle]));
+            }
         }
         w
+    }
+
+    fn rotations_close(a: &[f32], b: &[f32], f: usize, tol: f32) -> bool {
+        (7..DIMS).all(|c| (a[f * DIMS + c] - b[f * DIMS + c]).abs() < tol)
     }
 
     #[test]
@@ -132,13 +230,18 @@ mod tests {
         }
         let c = anchor_windows(&mut w, n, &[CuedFrames { head: 4, tail: 4 }]);
         for f in 0..n {
-            for ch in [ROOT_HORIZONTAL[0], ROOT_HORIZONTAL[1], 20] {
+            for ch in [ROOT_HORIZONTAL[0], ROOT_HORIZONTAL[1]] {
                 let (got, want) = (w[f * DIMS + ch], truth[f * DIMS + ch]);
                 assert!(
                     (got - want).abs() < 1e-4,
                     "frame {f} channel {ch}: {got} vs {want}"
                 );
             }
+            // A steady turn continues across the seams: nothing to correct.
+            assert!(
+                rotations_close(&w, &truth, f, 1e-5),
+                "frame {f} rotations moved"
+            );
             let (got, want) = (w[f * DIMS + ROOT_HEIGHT], truth[f * DIMS + ROOT_HEIGHT]);
             // The seam estimate averages the steps on both sides: exact up to the bob's curvature.
             assert!(
@@ -148,6 +251,77 @@ mod tests {
         }
         assert!((c.horizontal - 2.0).abs() < 1e-4, "{c:?}");
         assert!((c.height - 0.3).abs() < 5e-3, "{c:?}");
+    }
+
+    #[test]
+    fn a_rotation_jump_at_a_seam_fades_out_along_the_geodesic() {
+        let n = 40;
+        let truth = walking(n);
+        let mut w = truth.clone();
+        // The generated frames turn joint 5 by an extra 0.8 rad about x.
+        let extra = Mat3::from_axis_angle([0.8, 0.0, 0.0]);
+        for f in 4..n - 4 {
+            set_rotation(&mut w, f, 5, &extra.mul(&rotation(&truth, f, 5)));
+        }
+        let jumped = w.clone();
+        anchor_windows(&mut w, n, &[CuedFrames { head: 4, tail: 4 }]);
+        // At both seams the generated frame continues the cued ones (the joint is at rest).
+        for f in [4, n - 5] {
+            assert!(
+                rotations_close(&w, &truth, f, 1e-5),
+                "frame {f} not continued"
+            );
+        }
+        // Between the fades the model's pose is kept; cued frames are untouched.
+        for f in 4 + BLEND_FRAMES..n - 4 - BLEND_FRAMES {
+            assert!(rotations_close(&w, &jumped, f, 1e-6), "frame {f} changed");
+        }
+        for f in (0..4).chain(n - 4..n) {
+            assert!(
+                rotations_close(&w, &truth, f, 0.0 + 1e-7),
+                "cued frame {f} changed"
+            );
+        }
+        // Inside a fade every frame is still a rotation, and the turn shrinks steadily.
+        let angle = |f: usize| {
+            let a = rotation(&w, f, 5)
+                .mul(&rotation(&truth, f, 5).transpose())
+                .to_axis_angle();
+            (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+        };
+        for f in 5..4 + BLEND_FRAMES {
+            assert!(angle(f) >= angle(f - 1) - 1e-6, "frame {f}");
+            assert!((rotation(&w, f, 5).determinant() - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn the_root_velocity_hands_over_at_a_seam() {
+        let n = 32;
+        let mut w = walking(n);
+        // The generated frames walk 0.3 per frame instead of the cued 0.1.
+        for f in 4..n {
+            w[f * DIMS + ROOT_HORIZONTAL[0]] = 5.0 + 0.3 * (f - 4) as f32;
+        }
+        anchor_windows(&mut w, n, &[CuedFrames { head: 4, tail: 4 }]);
+        let x = |f: usize| w[f * DIMS + ROOT_HORIZONTAL[0]];
+        assert!(
+            (x(4) - x(3) - 0.1).abs() < 1e-5,
+            "first step keeps the cued speed"
+        );
+        for f in 5..4 + BLEND_FRAMES {
+            let (a, b) = (x(f - 1) - x(f - 2), x(f) - x(f - 1));
+            assert!(
+                b >= a - 1e-5 && b <= 0.3 + 1e-5,
+                "frame {f}: step {b} after {a}"
+            );
+        }
+        for f in 4 + BLEND_FRAMES..n {
+            assert!(
+                (x(f) - x(f - 1) - 0.3).abs() < 1e-5,
+                "frame {f}: generated speed"
+            );
+        }
     }
 
     #[test]
