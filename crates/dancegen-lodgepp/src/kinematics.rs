@@ -1,6 +1,9 @@
 //! Differentiable de-normalisation and forward kinematics of EDGE-151 windows, shared by the
 //! Foot Refine Block, the auxiliary losses and the penetration guidance.
 
+use dancegen_motion::fk::{self as host_fk, LocalRotations};
+use dancegen_motion::rotation;
+use dancegen_motion::skeleton::Skeleton;
 use dancegen_nn::burn;
 use dancegen_nn::loss::{FkSkeleton, forward_kinematics, rot6d_to_matrix};
 
@@ -95,63 +98,29 @@ pub fn joints(raw: Tensor<3>, skeleton: &FkSkeleton) -> Tensor<4> {
     forward_kinematics(mats, root, skeleton).reshape([b, t, j, 3])
 }
 
-/// pytorch3d's 6D → rotation matrix (rows `b1, b2, b1 × b2`), as
-/// [`dancegen_nn::loss::rot6d_to_matrix`] computes it.
-fn rot6d_rows(d: &[f32]) -> [[f32; 3]; 3] {
-    let unit = |v: [f32; 3]| {
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-12);
-        [v[0] / n, v[1] / n, v[2] / n]
-    };
-    let b1 = unit([d[0], d[1], d[2]]);
-    let p = b1[0] * d[3] + b1[1] * d[4] + b1[2] * d[5];
-    let b2 = unit([d[3] - b1[0] * p, d[4] - b1[1] * p, d[5] - b1[2] * p]);
-    let b3 = [
-        b1[1] * b2[2] - b1[2] * b2[1],
-        b1[2] * b2[0] - b1[0] * b2[2],
-        b1[0] * b2[1] - b1[1] * b2[0],
-    ];
-    [b1, b2, b3]
-}
-
-fn mat_mul(a: &[[f32; 3]; 3], b: &[[f32; 3]; 3]) -> [[f32; 3]; 3] {
-    let mut m = [[0f32; 3]; 3];
-    for (i, row) in m.iter_mut().enumerate() {
-        for (k, v) in row.iter_mut().enumerate() {
-            *v = a[i][0] * b[0][k] + a[i][1] * b[1][k] + a[i][2] * b[2][k];
-        }
-    }
-    m
-}
-
-/// [`joints`] on the host: raw frames `[N, 151]` (flat) → world joints `[N, 24, 3]` (flat).
+/// [`joints`] on the host: raw frames `[N, 151]` (flat) → world joints `[N, 24, 3]` (flat),
+/// through the motion crate's FK (pytorch3d 6D → matrix, then the same chain).
 pub fn joints_host(raw: &[f32], skeleton: &FkSkeleton) -> Vec<f32> {
     let j = skeleton.parents.len();
-    let frames = raw.len() / DIMS;
-    let mut out = vec![0f32; frames * j * 3];
-    let mut rot = vec![[[0f32; 3]; 3]; j];
-    for (f, frame) in raw.chunks_exact(DIMS).enumerate() {
-        let pos = &mut out[f * j * 3..(f + 1) * j * 3];
-        for k in 0..j {
-            let c = ROT6D_START + 6 * k;
-            let local = rot6d_rows(&frame[c..c + 6]);
-            match skeleton.parents[k] {
-                None => {
-                    rot[k] = local;
-                    pos[3 * k..3 * k + 3].copy_from_slice(&frame[4..7]);
-                }
-                Some(p) => {
-                    let o = skeleton.offsets[k].map(|v| v as f32);
-                    let r = rot[p];
-                    for a in 0..3 {
-                        pos[3 * k + a] =
-                            pos[3 * p + a] + r[a][0] * o[0] + r[a][1] * o[1] + r[a][2] * o[2];
-                    }
-                    rot[k] = mat_mul(&r, &local);
-                }
-            }
-        }
-    }
-    out
+    let d6: Vec<f32> = raw
+        .chunks_exact(DIMS)
+        .flat_map(|f| f[ROT6D_START..ROT6D_START + 6 * j].iter().copied())
+        .collect();
+    let root: Vec<f32> = raw
+        .chunks_exact(DIMS)
+        .flat_map(|f| f[4..7].iter().copied())
+        .collect();
+    let mats = rotation::rot6d_to_matrix(&d6);
+    // FkSkeleton comes from a motion-crate skeleton (`FkSkeleton::smpl24`), so it is valid.
+    let skel = Skeleton::new(
+        (0..j).map(|k| format!("joint{k}")).collect(),
+        skeleton.parents.clone(),
+        skeleton.offsets.clone(),
+    )
+    .expect("FkSkeleton is a valid skeleton");
+    host_fk::forward_kinematics(&skel, LocalRotations::Matrix(&mats), &root, false)
+        .expect("one matrix per joint and frame")
+        .positions
 }
 
 /// The four foot joints `[B, T, 4, 3]` of world joints `[B, T, 24, 3]`.
@@ -193,6 +162,8 @@ mod tests {
             .try_to_vec::<f32>()
             .unwrap();
         assert_eq!(host.len(), 2 * 5 * 24 * 3);
+        // The host path works in f64, the tensor path in f32: chains of 24 f32 3×3 products
+        // on random (unnormalised) 6D inputs drift by a few 1e-6 per metre; 1e-4 leaves room.
         for (a, b) in host.iter().zip(&diff) {
             assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "{a} vs {b}");
         }

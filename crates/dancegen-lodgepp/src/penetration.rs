@@ -9,7 +9,7 @@
 //! segment_tgt)` (positive inside). The gradient reaches only the arm joints' rotations
 //! (collars, shoulders, elbows, wrists, hands): the guidance moves arms, not the trunk.
 
-use dancegen_motion::capsule_body::{CAPSULES, penetration_pairs};
+use dancegen_motion::capsule_body::{CAPSULES, penetration_pairs, point_segment_distance_sq};
 use dancegen_nn::burn;
 use dancegen_nn::loss::FkSkeleton;
 
@@ -78,26 +78,24 @@ impl CapsulePairs {
     /// Whether any sampled point of the frame's joints `[24, 3]` (flat) is inside its target
     /// capsule: [`CapsulePairs::depths`] > 0 for some pair, computed on the host.
     pub fn any_inside(&self, joints: &[f32]) -> bool {
-        let at = |row: &[f32]| {
-            let mut p = [0f32; 3];
-            for (k, &w) in row.iter().enumerate() {
+        let at = |v: &[f32], m: usize| {
+            let mut p = [0f64; 3];
+            for (k, &w) in v[m * 24..(m + 1) * 24].iter().enumerate() {
                 if w != 0.0 {
-                    for a in 0..3 {
-                        p[a] += w * joints[3 * k + a];
+                    for (a, pa) in p.iter_mut().enumerate() {
+                        *pa += f64::from(w * joints[3 * k + a]);
                     }
                 }
             }
             p
         };
         (0..self.len()).any(|m| {
-            let rows = |v: &[f32]| at(&v[m * 24..(m + 1) * 24]);
-            let (p, a, b) = (rows(&self.point), rows(&self.seg_a), rows(&self.seg_b));
-            let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
-            let len2 = (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]).max(1e-12);
-            let s = ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / len2).clamp(0.0, 1.0);
-            let d2: f32 = (0..3).map(|k| (ap[k] - ab[k] * s).powi(2)).sum();
-            d2.max(1e-12).sqrt() < self.radius[m]
+            let d2 = point_segment_distance_sq(
+                at(&self.point, m),
+                at(&self.seg_a, m),
+                at(&self.seg_b, m),
+            );
+            d2.sqrt() < f64::from(self.radius[m])
         })
     }
 

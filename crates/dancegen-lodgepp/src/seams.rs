@@ -278,7 +278,7 @@ mod tests {
         }
         for f in (0..4).chain(n - 4..n) {
             assert!(
-                rotations_close(&w, &truth, f, 0.0 + 1e-7),
+                rotations_close(&w, &truth, f, 1e-7),
                 "cued frame {f} changed"
             );
         }
