@@ -19,6 +19,12 @@
 
 use std::time::Instant;
 
+/// The `dancegen` binary's allocator (`crates/dancegen-cli/src/main.rs`). With the system
+/// allocator the sampler's multi-megabyte activations go back to the kernel after every op, and
+/// this bench measured ~35 % slower than `dancegen generate` doing the same sampling.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use dancegen_lodgepp::config::{BOUNDARY_FRAMES, PddmTable};
 use dancegen_lodgepp::denoiser::{PddmCond, PddmDenoiser};
 use dancegen_lodgepp::layout::DIMS;

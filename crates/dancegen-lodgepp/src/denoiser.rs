@@ -8,7 +8,7 @@
 //! pooled music. Classifier-free guidance replaces the music by a learned null token and the
 //! genre by a null genre. After the main output comes the [`FootRefine`] block.
 
-use dancegen_nn::attention::AttnMasks;
+use dancegen_nn::attention::{AttnMasks, ProjectedKv};
 use dancegen_nn::burn;
 use dancegen_nn::diffusion::{Conditioning, Denoiser};
 use dancegen_nn::loss::FkSkeleton;
@@ -189,6 +189,31 @@ impl PddmDenoiser {
             Keep::None => vec![false; b],
             Keep::Some(k) => k.to_vec(),
         };
+        let prepared = self.prepare_with(c, &keep_vec, frames, d, false, device);
+        self.forward_prepared(x_t, t, &prepared, refine)
+    }
+
+    /// Everything of the condition that does not change between denoising steps, for
+    /// [`Self::forward_prepared`]: the cross-attention memory (music or the null token, and
+    /// the genre) with each decoder layer's key/value projections of it, and the step-free part
+    /// of the FiLM vector. `keep[i]`: window `i` sees music and genre (false = the guidance's
+    /// unconditional branch).
+    pub fn prepare(&self, c: &PddmCond, keep: &[bool]) -> PreparedCond {
+        let [b, frames, _] = c.primitives.dims();
+        assert_eq!(keep.len(), b, "one keep flag per window");
+        self.prepare_with(c, keep, frames, self.d_model, true, &c.primitives.device())
+    }
+
+    fn prepare_with(
+        &self,
+        c: &PddmCond,
+        keep_vec: &[bool],
+        frames: usize,
+        d: usize,
+        project: bool,
+        device: &Device,
+    ) -> PreparedCond {
+        let b = keep_vec.len();
         let null = self.null_music.val().expand([b, frames, d]);
         let music = if keep_vec.iter().all(|&k| !k) {
             null
@@ -208,7 +233,7 @@ impl PddmDenoiser {
         let genre: Vec<i64> = c
             .genre
             .iter()
-            .zip(&keep_vec)
+            .zip(keep_vec)
             .map(|(&g, &k)| if k { g as i64 } else { self.genres as i64 })
             .collect();
         let genre = self.genre.forward(Tensor::<2, Int>::from_data(
@@ -216,22 +241,46 @@ impl PddmDenoiser {
             device,
         ));
         let memory = Tensor::cat(vec![music.clone(), genre.clone()], 1);
-        let film = self.time_cond.forward(self.time.forward(t, device))
-            + genre.reshape([b, d])
-            + music.mean_dim(1).reshape([b, d]);
-        let rotary = Rotary::new(d).tables(0, frames, device);
+        let film_cond = genre.reshape([b, d]) + music.mean_dim(1).reshape([b, d]);
+        let memory_kv = project.then(|| {
+            self.layers
+                .iter()
+                .map(|l| l.cross_kv(memory.clone()))
+                .collect()
+        });
+        PreparedCond {
+            primitives: c.primitives.clone(),
+            mask: c.mask.clone(),
+            memory,
+            memory_kv,
+            film_cond,
+        }
+    }
+
+    /// The network on a condition from [`Self::prepare`] (same output as [`Self::forward`]).
+    pub fn forward_prepared(
+        &self,
+        x_t: Tensor<3>,
+        t: &[f32],
+        p: &PreparedCond,
+        refine: bool,
+    ) -> PddmOutput {
+        let frames = x_t.dims()[1];
+        let device = x_t.device();
+        let film = self.time_cond.forward(self.time.forward(t, &device)) + p.film_cond.clone();
+        let rotary = Rotary::new(self.d_model).tables(0, frames, &device);
         let none = AttnMasks::default();
         let ctx = DecoderContext {
-            memory,
+            memory: p.memory.clone(),
             cond: film.clone(),
             self_masks: &none,
             cross_masks: &none,
             rotary: Some(&rotary),
         };
-        let x = Tensor::cat(vec![x_t, c.primitives.clone(), c.mask.clone()], 2);
+        let x = Tensor::cat(vec![x_t, p.primitives.clone(), p.mask.clone()], 2);
         let mut h = self.input.forward(x);
-        for l in &self.layers {
-            h = l.forward(h, &ctx);
+        for (i, l) in self.layers.iter().enumerate() {
+            h = l.forward_with_kv(h, &ctx, p.memory_kv.as_ref().map(|kv| &kv[i]));
         }
         let main = self.output.forward(h.clone());
         let refined = match (&self.refine, refine) {
@@ -242,6 +291,21 @@ impl PddmDenoiser {
         };
         PddmOutput { main, refined }
     }
+}
+
+/// The step-invariant part of a condition ([`PddmDenoiser::prepare`]).
+#[derive(Clone, Debug)]
+pub struct PreparedCond {
+    /// `[B, T, 151]`.
+    pub primitives: Tensor<3>,
+    /// `[B, T, 1]`.
+    pub mask: Tensor<3>,
+    /// Cross-attention tokens `[B, T + 1, d]`.
+    pub memory: Tensor<3>,
+    /// Each decoder layer's key/value projections of `memory`.
+    pub memory_kv: Option<Vec<ProjectedKv>>,
+    /// Genre embedding + pooled music `[B, d]`.
+    pub film_cond: Tensor<2>,
 }
 
 /// The denoiser as the shared samplers see it: its refined x̂0, with or without the refine

@@ -5,7 +5,6 @@
 //! step, as in training where those frames of `d_t` are the clean values.
 
 use dancegen_nn::burn;
-use dancegen_nn::diffusion::Conditioning;
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::diffusion::pddm::ResidualShift;
 
@@ -97,41 +96,41 @@ pub fn sample_windows_with(
         music_encoded: Some(encoded.clone()),
         ..cond.clone()
     };
-    let doubled = guided.then(|| PddmCond {
-        music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
-        genre: [cond.genre.clone(), cond.genre.clone()].concat(),
-        primitives: Tensor::cat(vec![cond.primitives.clone(), cond.primitives.clone()], 0),
-        mask: Tensor::cat(vec![cond.mask.clone(), cond.mask.clone()], 0),
-        music_encoded: Some(Tensor::cat(vec![encoded.clone(), encoded], 0)),
-    });
-    let keep: Vec<bool> = (0..2 * b).map(|i| i < b).collect();
+    // Music, genre and their cross-attention projections are the same at every step.
+    let prepared = if guided {
+        let doubled = PddmCond {
+            music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
+            genre: [cond.genre.clone(), cond.genre.clone()].concat(),
+            primitives: Tensor::cat(vec![cond.primitives.clone(), cond.primitives.clone()], 0),
+            mask: Tensor::cat(vec![cond.mask.clone(), cond.mask.clone()], 0),
+            music_encoded: Some(Tensor::cat(vec![encoded.clone(), encoded], 0)),
+        };
+        let keep: Vec<bool> = (0..2 * b).map(|i| i < b).collect();
+        net.prepare(&doubled, &keep)
+    } else {
+        net.prepare(cond, &vec![true; b])
+    };
     let pairs = opts.penetration.map(|_| CapsulePairs::new());
     let ts = shift.strided(opts.steps);
     for (i, &t) in ts.iter().enumerate() {
         let s = ts.get(i + 1).copied().unwrap_or(0);
-        let mut x0 = match &doubled {
-            None => {
-                let tt = vec![(t - 1) as f32; b];
-                net.forward(d.clone(), &tt, Conditioning::Full(cond), opts.refine)
-                    .refined
-            }
-            Some(c2) => {
-                let tt = vec![(t - 1) as f32; 2 * b];
-                let both = net
-                    .forward(
-                        Tensor::cat(vec![d.clone(), d.clone()], 0),
-                        &tt,
-                        Conditioning::Dropout {
-                            cond: c2,
-                            keep: &keep,
-                        },
-                        opts.refine,
-                    )
-                    .refined;
-                let c = both.clone().narrow(0, 0, b);
-                let u = both.narrow(0, b, b);
-                u.clone() + (c - u) * opts.guidance
-            }
+        let mut x0 = if guided {
+            let tt = vec![(t - 1) as f32; 2 * b];
+            let both = net
+                .forward_prepared(
+                    Tensor::cat(vec![d.clone(), d.clone()], 0),
+                    &tt,
+                    &prepared,
+                    opts.refine,
+                )
+                .refined;
+            let c = both.clone().narrow(0, 0, b);
+            let u = both.narrow(0, b, b);
+            u.clone() + (c - u) * opts.guidance
+        } else {
+            let tt = vec![(t - 1) as f32; b];
+            net.forward_prepared(d.clone(), &tt, &prepared, opts.refine)
+                .refined
         };
         if let (Some((g, last)), Some(p)) = (&opts.penetration, &pairs)
             && ts.len() - i <= *last

@@ -5,7 +5,7 @@
 //! checkpoint). Queries, keys and values come in separately so that a rotary encoding can be
 //! applied to the query/key input only, as EDGE does (`rotary(x)` for q and k, plain `x` for v).
 //! The scaled dot product runs in Burn's fused `attention` op (flash-style tiling on long
-//! sequences in burn-flex); dropout is applied to the output, not to the attention weights, which
+//! sequences in burn-flex) when training, and in [`crate::host_attention`] at inference; dropout is applied to the output, not to the attention weights, which
 //! the fused op does not expose.
 
 use burn::config::Config;
@@ -14,6 +14,9 @@ use burn::nn::{Dropout, DropoutConfig, Linear, LinearConfig};
 use burn::tensor::module::attention;
 use burn::tensor::ops::AttentionModuleOptions;
 use burn::tensor::{Bool, Tensor};
+
+use crate::host_attention::{self, HostKv};
+use std::sync::Arc;
 
 /// Configuration of [`MultiHeadAttention`].
 #[derive(Config, Debug)]
@@ -65,6 +68,15 @@ impl MultiHeadAttentionConfig {
     }
 }
 
+/// Projected keys and values `[B, Tk, d_model]` (before the head split), with a host copy
+/// for inference.
+#[derive(Clone, Debug)]
+pub struct ProjectedKv {
+    pub k: Tensor<3>,
+    pub v: Tensor<3>,
+    host: Option<Arc<HostKv>>,
+}
+
 /// Optional masks of one attention call.
 #[derive(Clone, Debug, Default)]
 pub struct AttnMasks {
@@ -83,10 +95,62 @@ impl MultiHeadAttention {
         value: Tensor<3>,
         masks: &AttnMasks,
     ) -> Tensor<3> {
-        let q = self.split_heads(self.q_proj.forward(query));
-        let k = self.split_heads(self.k_proj.forward(key));
-        let v = self.split_heads(self.v_proj.forward(value));
+        let q = self.q_proj.forward(query);
+        let k = self.k_proj.forward(key);
+        let v = self.v_proj.forward(value);
+        if host_attention::eligible(&q) {
+            let kv = HostKv::new(k, v);
+            return self.host(q, &kv, masks);
+        }
+        let (q, k, v) = (
+            self.split_heads(q),
+            self.split_heads(k),
+            self.split_heads(v),
+        );
         self.attend(q, k, v, masks)
+    }
+
+    /// The key/value projections of a context that stays the same over many calls (the music of
+    /// a diffusion sampler's every step), for [`Self::forward_projected`].
+    pub fn project_kv(&self, key: Tensor<3>, value: Tensor<3>) -> ProjectedKv {
+        let k = self.k_proj.forward(key);
+        let v = self.v_proj.forward(value);
+        let host =
+            host_attention::eligible(&k).then(|| Arc::new(HostKv::new(k.clone(), v.clone())));
+        ProjectedKv { k, v, host }
+    }
+
+    /// [`Self::forward`] with the keys and values already projected.
+    pub fn forward_projected(
+        &self,
+        query: Tensor<3>,
+        kv: &ProjectedKv,
+        masks: &AttnMasks,
+    ) -> Tensor<3> {
+        let q = self.q_proj.forward(query);
+        if let Some(host) = &kv.host
+            && host_attention::eligible(&q)
+        {
+            return self.host(q, host, masks);
+        }
+        let (q, k, v) = (
+            self.split_heads(q),
+            self.split_heads(kv.k.clone()),
+            self.split_heads(kv.v.clone()),
+        );
+        self.attend(q, k, v, masks)
+    }
+
+    /// Inference: [`host_attention`], then the output projection.
+    fn host(&self, q: Tensor<3>, kv: &HostKv, masks: &AttnMasks) -> Tensor<3> {
+        let out = host_attention::attention(
+            q,
+            kv,
+            self.n_heads,
+            masks.attn.as_ref(),
+            masks.key_padding.as_ref(),
+        );
+        self.dropout.forward(self.out_proj.forward(out))
     }
 
     /// Attention on already projected, head-split `q` `[B, H, Tq, dh]`, `k`/`v` `[B, H, Tk, dh]`

@@ -21,7 +21,11 @@ pub enum Activation {
 impl Activation {
     pub fn apply<const D: usize>(self, x: Tensor<D>) -> Tensor<D> {
         match self {
-            Activation::Gelu => gelu(x),
+            // Burn's erf is scalar libm; without autodiff the vectorised one is used.
+            Activation::Gelu => match crate::vector_math::gelu_tensor(x.clone()) {
+                Some(y) => y,
+                None => gelu(x),
+            },
             Activation::Relu => relu(x),
             Activation::Mish => mish(x),
             Activation::Silu => silu(x),

@@ -15,7 +15,7 @@ use burn::module::Module;
 use burn::nn::{Dropout, DropoutConfig, LayerNorm, LayerNormConfig};
 use burn::tensor::{Device, Tensor};
 
-use crate::attention::{AttnMasks, MultiHeadAttention, MultiHeadAttentionConfig};
+use crate::attention::{AttnMasks, MultiHeadAttention, MultiHeadAttentionConfig, ProjectedKv};
 use crate::film::{Film, FilmConfig};
 use crate::mlp::{Activation, Mlp, MlpConfig};
 use crate::pos_encoding::RotaryTables;
@@ -171,6 +171,22 @@ pub struct DecoderContext<'a> {
 
 impl FilmDecoderLayer {
     pub fn forward(&self, x: Tensor<3>, ctx: &DecoderContext) -> Tensor<3> {
+        self.forward_with_kv(x, ctx, None)
+    }
+
+    /// The cross-attention keys and values of `memory`, to reuse over calls that share it
+    /// ([`Self::forward_with_kv`]).
+    pub fn cross_kv(&self, memory: Tensor<3>) -> ProjectedKv {
+        self.cross_attn.project_kv(memory.clone(), memory)
+    }
+
+    /// [`Self::forward`]; `kv`, when given, must be [`Self::cross_kv`] of `ctx.memory`.
+    pub fn forward_with_kv(
+        &self,
+        x: Tensor<3>,
+        ctx: &DecoderContext,
+        kv: Option<&ProjectedKv>,
+    ) -> Tensor<3> {
         let h = self.norm1.forward(x.clone());
         let qk = ctx.rotary.map_or(h.clone(), |r| r.rotate(h.clone()));
         let sa = self
@@ -179,12 +195,14 @@ impl FilmDecoderLayer {
         let x = x + self.film1.modulate(sa, ctx.cond.clone());
 
         let h = self.norm2.forward(x.clone());
-        let ca = self.dropout2.forward(self.cross_attn.forward(
-            h,
-            ctx.memory.clone(),
-            ctx.memory.clone(),
-            ctx.cross_masks,
-        ));
+        let ca = match kv {
+            Some(kv) => self.cross_attn.forward_projected(h, kv, ctx.cross_masks),
+            None => {
+                self.cross_attn
+                    .forward(h, ctx.memory.clone(), ctx.memory.clone(), ctx.cross_masks)
+            }
+        };
+        let ca = self.dropout2.forward(ca);
         let x = x + self.film2.modulate(ca, ctx.cond.clone());
 
         let ff = self
