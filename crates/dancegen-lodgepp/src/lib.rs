@@ -17,6 +17,9 @@
 //!    hand and forearm points are pushed out of a capsule body (`dancegen_motion`'s capsules)
 //!    by the gradient of its signed distance during denoising.
 //!
+//! 5. **Planted feet** ([`planted_feet`], not part of Lodge++): the root stops gliding with the
+//!    support foot and leg IK pins planted ankles and toes (`--no-foot-lock` switches it off).
+//!
 //! Motion is EDGE's 151-dim vector at 30 fps ([`layout`]).
 
 pub mod bundle;
@@ -30,6 +33,7 @@ pub mod layout;
 pub mod library;
 pub mod penetration;
 pub mod pipeline;
+pub mod planted_feet;
 pub mod primitives;
 pub mod sampler;
 pub mod seams;

@@ -22,17 +22,12 @@ use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
 use crate::denoiser::PddmCond;
-use crate::foot_refine::CONTACT_HEIGHT;
-use crate::kinematics::joints_host;
-use crate::layout::{self, CONTACTS, DIMS, FEET, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
+use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
-use dancegen_motion::foot_lock::{Axes, height_contacts, planted_feet_offsets};
-use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
-use dancegen_nn::loss::FkSkeleton;
 
 /// Which long-form sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,7 +49,8 @@ pub struct GenerateOptions {
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub gpt: SamplingOptions,
     pub max_beat_shift: usize,
-    /// Post-processing: planted feet stay in place ([`lock_planted_feet`]).
+    /// Post-processing: planted feet stay in place
+    /// ([`crate::planted_feet::clean_planted_feet`]).
     pub foot_lock: bool,
 }
 
@@ -161,7 +157,12 @@ impl SoloModel {
         };
         out.truncate(frames * DIMS);
         if opts.foot_lock {
-            lock_planted_feet(&mut out);
+            let ik = crate::planted_feet::clean_planted_feet(&mut out);
+            tracing::debug!(
+                adjusted = ik.adjusted,
+                unreached_m = ik.max_unreached_m,
+                "leg IK on planted feet"
+            );
         }
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         GeneratedDance {
@@ -295,7 +296,12 @@ impl SoloModel {
     ) -> (Vec<f32>, usize) {
         let n = self.config.pddm.pddm.window;
         let l = frames.div_ceil(n);
+        let started = std::time::Instant::now();
         let coarse = self.coarse_dance(music, frames, opts, device);
+        tracing::debug!(
+            "timing: coarse dance (GPT + VQ-VAE) in {:?}",
+            started.elapsed()
+        );
         let cf = coarse.len() / MAIN_DIMS;
         let half = PRIMITIVE_FRAMES / 2;
         // Motion beats of the coarse dance → nearest music beats.
@@ -377,6 +383,7 @@ impl SoloModel {
             values: Tensor::from_data(TensorData::new(cue_v, [l, n, DIMS]), device),
             mask: Tensor::from_data(TensorData::new(cue_m, [l, n, DIMS]), device),
         };
+        tracing::debug!("timing: primitives ready at {:?}", started.elapsed());
         let x = sample_windows(
             &self.pddm,
             &self.shift(),
@@ -386,7 +393,9 @@ impl SoloModel {
             device,
             grad_device,
         );
-        (host(x), keys)
+        let x = host(x);
+        tracing::debug!("timing: PDDM sampling done at {:?}", started.elapsed());
+        (x, keys)
     }
 
     /// Window after window, each starting with the previous one's last 4 frames.
@@ -501,47 +510,6 @@ impl SoloModel {
 pub const STAGE_HALF_SIZE: f32 = 2.0;
 /// Gaussian σ (frames, 4 s at 30 fps) separating slow travel from dance steps.
 pub const STAGE_SMOOTHING_FRAMES: f64 = 120.0;
-
-/// Moves the root's horizontal path (raw frames `[T, 151]`) so planted feet do not glide
-/// (`dancegen_motion::foot_lock`). A foot is planted where the model's contact channel says so
-/// or where it is near the floor: within the contact heights the Foot Refine Block uses (LODGE's
-/// labels, ankle 12 cm, toe 5 cm) of the height the supporting foot stands at
-/// ([`GroundMode::SupportFeet`], the floor `dancegen generate` puts the dance on).
-pub fn lock_planted_feet(frames: &mut [f32]) {
-    let skel = FkSkeleton::smpl24();
-    let joints = joints_host(frames, &skel);
-    let t = frames.len() / DIMS;
-    if t == 0 {
-        return;
-    }
-    let feet: Vec<f32> = (0..t)
-        .flat_map(|f| {
-            FEET.iter()
-                .flat_map(move |&j| (0..3).map(move |a| (f, j, a)))
-        })
-        .map(|(f, j, a)| joints[(f * 24 + j) * 3 + a])
-        .collect();
-    // The floor from a Y-up view of the joints (only heights matter to it).
-    let heights: Vec<f32> = joints
-        .chunks_exact(3)
-        .flat_map(|p| [0.0, p[2], 0.0])
-        .collect();
-    let floor = SmplMotion::ground_height(&heights, GroundMode::SupportFeet);
-    let near = height_contacts(&feet, FEET.len(), 2, floor, &CONTACT_HEIGHT);
-    let contact: Vec<f32> = frames
-        .chunks_exact(DIMS)
-        .flat_map(|f| f[CONTACTS].iter().copied())
-        .zip(near)
-        .map(|(label, low)| label.max(low))
-        .collect();
-    // Z-up: the root's horizontal channels are x and y.
-    let offsets = planted_feet_offsets(&feet, &contact, FEET.len(), Axes::Z_UP);
-    for (f, o) in frames.chunks_exact_mut(DIMS).zip(offsets) {
-        for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
-            f[c] += o[k];
-        }
-    }
-}
 
 /// The cues of the Lodge++ sampler's `l` windows: every inner boundary's 4 + 4 shared frames.
 pub fn shared_boundary_cues(l: usize) -> Vec<CuedFrames> {

@@ -308,7 +308,7 @@ fn foot_lock_holds_a_planted_foot_of_a_gliding_body() {
         [all[(f * 24 + j) * 3], all[(f * 24 + j) * 3 + 1]]
     };
     let before_right: Vec<[f32; 2]> = (0..t).map(|f| foot(&frames, f, 8)).collect();
-    dancegen_lodgepp::pipeline::lock_planted_feet(&mut frames);
+    dancegen_lodgepp::planted_feet::lock_planted_feet(&mut frames);
     let left0 = foot(&frames, 0, 7);
     for (f, right_before) in before_right.iter().enumerate() {
         let l = foot(&frames, f, 7);
@@ -330,7 +330,7 @@ fn foot_lock_holds_a_planted_foot_of_a_gliding_body() {
         fr[6] = if f < 10 { 0.9 } else { 1.3 };
         jump.extend(fr);
     }
-    dancegen_lodgepp::pipeline::lock_planted_feet(&mut jump);
+    dancegen_lodgepp::planted_feet::lock_planted_feet(&mut jump);
     let x = |f: usize| jump[f * DIMS + 4];
     for f in 1..10 {
         assert!(
@@ -344,5 +344,56 @@ fn foot_lock_holds_a_planted_foot_of_a_gliding_body() {
             (x(f) - x(f - 1) - 0.02).abs() < 1e-5,
             "frame {f}: in the air, glide kept"
         );
+    }
+}
+
+#[test]
+fn leg_ik_holds_both_planted_feet_when_one_leg_swings() {
+    // A body standing with bent knees, both feet labelled planted; the right hip turns a
+    // little more every frame, so its foot slides. The root lock can hold one foot; the leg IK
+    // holds the other. (A straight leg cannot reach a moved target: that case is reported as
+    // unreached, see dancegen_motion::foot_ik.)
+    let t = 24;
+    let mut frames = Vec::with_capacity(t * DIMS);
+    let set = |fr: &mut [f32], j: usize, m: Mat3| {
+        let d = m.to_6d();
+        for k in 0..6 {
+            fr[rot6d(j, k)] = d[k] as f32;
+        }
+    };
+    for f in 0..t {
+        let mut fr = rest_frame();
+        fr[..4].iter_mut().for_each(|c| *c = 1.0);
+        set(&mut fr, 1, Mat3::from_axis_angle([-0.3, 0.0, 0.0]));
+        set(&mut fr, 4, Mat3::from_axis_angle([0.6, 0.0, 0.0]));
+        set(&mut fr, 5, Mat3::from_axis_angle([0.6, 0.0, 0.0]));
+        let swing = Mat3::from_axis_angle([0.0, 0.0, 0.01 * f as f64]);
+        set(&mut fr, 2, swing * Mat3::from_axis_angle([-0.3, 0.0, 0.0]));
+        frames.extend(fr);
+    }
+    let original = frames.clone();
+    let skel = FkSkeleton::smpl24();
+    let report = dancegen_lodgepp::planted_feet::clean_planted_feet(&mut frames);
+    assert!(report.adjusted > 0);
+    let joints = dancegen_lodgepp::kinematics::joints_host(&frames, &skel);
+    let at =
+        |f: usize, j: usize| -> [f32; 3] { std::array::from_fn(|a| joints[(f * 24 + j) * 3 + a]) };
+    for j in [7, 8, 10, 11] {
+        for f in 1..t {
+            let (p, q) = (at(f, j), at(0, j));
+            let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            assert!(d < 2e-3, "joint {j} moved {d} m by frame {f}");
+        }
+    }
+    // Only the root's horizontal path and the legs' rotations changed.
+    let legs: Vec<usize> = [1, 2, 4, 5, 7, 8]
+        .iter()
+        .flat_map(|&j| rot6d(j, 0)..rot6d(j, 0) + 6)
+        .collect();
+    for (i, (a, b)) in frames.iter().zip(&original).enumerate() {
+        let c = i % DIMS;
+        if !(legs.contains(&c) || c == 4 || c == 5) {
+            assert_eq!(a, b, "channel {c} changed");
+        }
     }
 }

@@ -10,6 +10,7 @@ pub mod bvh_motion;
 pub mod capsule_body;
 pub mod conventions;
 pub mod fk;
+pub mod foot_ik;
 pub mod foot_lock;
 pub mod formats;
 pub mod gltf;

@@ -1,0 +1,144 @@
+//! Post-processing of planted feet on generated raw frames `[T, 151]`: the root stops gliding
+//! with the support foot ([`lock_planted_feet`], `dancegen_motion::foot_lock`), then leg IK
+//! pins every planted ankle and toe ([`pin_planted_feet`], `dancegen_motion::foot_ik`).
+//! Neither is part of Lodge++; `--no-foot-lock` switches both off.
+//!
+//! A foot is planted where the model's contact channel says so or where it is near the floor:
+//! within the contact heights the Foot Refine Block uses (LODGE's labels, ankle 12 cm, toe
+//! 5 cm) of the height the supporting foot stands at ([`GroundMode::SupportFeet`], the floor
+//! `dancegen generate` puts the dance on).
+
+use dancegen_motion::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
+use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, planted_feet_offsets};
+use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
+use dancegen_motion::rotation::Mat3;
+use dancegen_motion::skeleton::Skeleton;
+use dancegen_nn::loss::FkSkeleton;
+
+use crate::foot_refine::CONTACT_HEIGHT;
+use crate::kinematics::joints_host;
+use crate::layout::{CONTACTS, DIMS, FEET, ROOT_HORIZONTAL, ROT6D_START};
+
+/// Frames over which the IK fades in before and out after a contact (0.13 s at 30 fps: a
+/// foot lands and lifts within about that).
+pub const IK_BLEND_FRAMES: usize = 4;
+
+/// Both passes: root lock, then leg IK.
+pub fn clean_planted_feet(frames: &mut [f32]) -> FootIkReport {
+    lock_planted_feet(frames);
+    pin_planted_feet(frames)
+}
+
+/// Moves the root's horizontal path so the support foot does not glide.
+pub fn lock_planted_feet(frames: &mut [f32]) {
+    let Some((feet, contact)) = feet_and_contacts(frames) else {
+        return;
+    };
+    // Z-up: the root's horizontal channels are x and y.
+    let offsets = planted_feet_offsets(&feet, &contact, FEET.len(), Axes::Z_UP);
+    for (f, o) in frames.chunks_exact_mut(DIMS).zip(offsets) {
+        for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+            f[c] += o[k];
+        }
+    }
+}
+
+/// Leg IK: every planted ankle and toe holds the mean place of its contact run; the hips',
+/// knees' and ankles' 6D channels change, nothing else.
+pub fn pin_planted_feet(frames: &mut [f32]) -> FootIkReport {
+    let Some((_, contact)) = feet_and_contacts(frames) else {
+        return FootIkReport::default();
+    };
+    let t = frames.len() / DIMS;
+    let skel = FkSkeleton::smpl24();
+    let j = skel.parents.len();
+    let skeleton = Skeleton::new(
+        (0..j).map(|k| format!("joint{k}")).collect(),
+        skel.parents.clone(),
+        skel.offsets.clone(),
+    )
+    .expect("FkSkeleton is a valid skeleton");
+    let mut local: Vec<Mat3> = frames
+        .chunks_exact(DIMS)
+        .flat_map(|f| {
+            (0..j).map(move |k| {
+                let d: [f64; 6] = std::array::from_fn(|i| f64::from(f[ROT6D_START + 6 * k + i]));
+                Mat3::from_6d(&d)
+            })
+        })
+        .collect();
+    let root: Vec<[f64; 3]> = frames
+        .chunks_exact(DIMS)
+        .map(|f| std::array::from_fn(|a| f64::from(f[4 + a])))
+        .collect();
+    // Contact columns follow FEET: left ankle, right ankle, left toe, right toe.
+    let planted = |col: usize| -> Vec<bool> {
+        (0..t)
+            .map(|f| contact[f * FEET.len() + col] >= PLANTED)
+            .collect()
+    };
+    let contacts = [
+        LegContacts {
+            ankle: planted(0),
+            toe: planted(2),
+        },
+        LegContacts {
+            ankle: planted(1),
+            toe: planted(3),
+        },
+    ];
+    debug_assert_eq!([SMPL_LEGS[0].ankle, SMPL_LEGS[1].ankle], [FEET[0], FEET[1]]);
+    debug_assert_eq!([SMPL_LEGS[0].toe, SMPL_LEGS[1].toe], [FEET[2], FEET[3]]);
+    let report = foot_ik::pin_planted_feet(
+        &skeleton,
+        &mut local,
+        &root,
+        &SMPL_LEGS,
+        &contacts,
+        IK_BLEND_FRAMES,
+    );
+    let changed: Vec<usize> = SMPL_LEGS
+        .iter()
+        .flat_map(|l| [l.hip, l.knee, l.ankle])
+        .collect();
+    for (f, frame) in frames.chunks_exact_mut(DIMS).enumerate() {
+        for &k in &changed {
+            let d = local[f * j + k].to_6d();
+            for (i, v) in d.iter().enumerate() {
+                frame[ROT6D_START + 6 * k + i] = *v as f32;
+            }
+        }
+    }
+    report
+}
+
+/// The feet `[T, 4, 3]` (world, metres, Z-up) and their contacts `[T, 4]` (the model's label
+/// or 1 near the floor), in [`FEET`] order; `None` for no frames.
+fn feet_and_contacts(frames: &[f32]) -> Option<(Vec<f32>, Vec<f32>)> {
+    let t = frames.len() / DIMS;
+    if t == 0 {
+        return None;
+    }
+    let joints = joints_host(frames, &FkSkeleton::smpl24());
+    let feet: Vec<f32> = (0..t)
+        .flat_map(|f| {
+            FEET.iter()
+                .flat_map(move |&j| (0..3).map(move |a| (f, j, a)))
+        })
+        .map(|(f, j, a)| joints[(f * 24 + j) * 3 + a])
+        .collect();
+    // The floor from a Y-up view of the joints (only heights matter to it).
+    let heights: Vec<f32> = joints
+        .chunks_exact(3)
+        .flat_map(|p| [0.0, p[2], 0.0])
+        .collect();
+    let floor = SmplMotion::ground_height(&heights, GroundMode::SupportFeet);
+    let near = height_contacts(&feet, FEET.len(), 2, floor, &CONTACT_HEIGHT);
+    let contact: Vec<f32> = frames
+        .chunks_exact(DIMS)
+        .flat_map(|f| f[CONTACTS].iter().copied())
+        .zip(near)
+        .map(|(label, low)| label.max(low))
+        .collect();
+    Some((feet, contact))
+}
