@@ -39,7 +39,7 @@ CONFIGS = [
      "lodgepp"),
     ("no_pen_guidance", "w/o penetration guidance (`--no-penetration-guidance`)",
      "--no-penetration-guidance", "lodgepp"),
-    ("no_foot_lock", "w/o foot lock post-processing (`--no-foot-lock`; not part of Lodge++)",
+    ("no_foot_lock", "w/o foot lock + leg IK post-processing (`--no-foot-lock`; not part of Lodge++)",
      "--no-foot-lock", "lodgepp"),
     ("edge", "EDGE-style sampler (`--sampler edge`)", "--sampler edge", "edge"),
 ]

@@ -86,8 +86,8 @@ pub struct GenerateArgs {
     /// Switch off the penetration guidance (ablation).
     #[arg(long)]
     pub no_penetration_guidance: bool,
-    /// Leave the root path as generated: no correction keeping the feet the model predicts as
-    /// planted in place (a post-processing step, not part of Lodge++).
+    /// Leave the feet as generated: no root-path correction for the support foot and no leg IK
+    /// pinning planted feet (post-processing steps, not part of Lodge++).
     #[arg(long)]
     pub no_foot_lock: bool,
 }

@@ -55,7 +55,7 @@ pub struct SamplingDefaults {
     pub penetration_steps: usize,
     /// Largest shift (frames) of a key motion onto the nearest music beat.
     pub max_beat_shift: usize,
-    /// Keep the feet the model predicts as planted in place (`dancegen_motion::foot_lock`;
+    /// Keep planted feet in place: root lock, then leg IK (`dancegen_lodgepp::planted_feet`;
     /// not part of Lodge++).
     pub foot_lock: bool,
 }

@@ -16,15 +16,16 @@
 //! Semantics match Burn's attention: scale `1/√dh`, blocked scores are −∞, a fully blocked
 //! row gives zeros; NaN scores propagate.
 
-use burn::tensor::{Bool, DType, Tensor, TensorData};
+use burn::tensor::{Bool, DType, Device, Tensor, TensorData};
 use gemm::Parallelism;
 use rayon::prelude::*;
 
 use crate::vector_math::{exp, widest};
 
-/// Whether a tensor can take the host path: plain `f32`, no autodiff.
+/// Whether a tensor can take the host path: plain `f32` on the flex CPU backend (a GPU
+/// tensor keeps Burn's op), no autodiff.
 pub fn eligible(t: &Tensor<3>) -> bool {
-    !t.is_autodiff() && t.dtype() == DType::F32
+    !t.is_autodiff() && t.dtype() == DType::F32 && t.device() == Device::flex()
 }
 
 /// Projected keys and values `[B, Tk, d]` on the host.
@@ -325,6 +326,14 @@ mod tests {
 
     fn max_abs_diff(a: Tensor<3>, b: Tensor<3>) -> f32 {
         (a - b).abs().max().into_scalar::<f32>()
+    }
+
+    #[test]
+    fn inference_tensors_take_the_host_path_and_tracked_ones_do_not() {
+        let dev = Device::flex();
+        assert!(eligible(&Tensor::<3>::zeros([1, 2, 3], &dev)));
+        let tracked = Tensor::<3>::zeros([1, 2, 3], &dev.autodiff()).require_grad();
+        assert!(!eligible(&tracked));
     }
 
     #[test]
