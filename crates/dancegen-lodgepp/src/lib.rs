@@ -37,6 +37,7 @@ pub mod planted_feet;
 pub mod primitives;
 pub mod sampler;
 pub mod seams;
+pub mod smoothing;
 pub mod training;
 
 pub use dancegen_nn::burn::tensor::Device;

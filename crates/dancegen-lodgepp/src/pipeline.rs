@@ -28,6 +28,7 @@ use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
+use crate::smoothing::{Ends, gaussian_smooth};
 
 /// Which long-form sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -529,22 +530,13 @@ pub fn keep_on_stage(frames: &mut [f32], half: f32, sigma: f64) {
     if t == 0 {
         return;
     }
-    let r = (3.0 * sigma).ceil() as i64;
-    let w: Vec<f64> = (-r..=r)
-        .map(|i| (-((i * i) as f64) / (2.0 * sigma * sigma)).exp())
-        .collect();
     for &c in &ROOT_HORIZONTAL {
         let x: Vec<f64> = (0..t).map(|f| f64::from(frames[f * DIMS + c])).collect();
-        for f in 0..t {
-            let (mut acc, mut norm) = (0.0, 0.0);
-            for (k, wk) in (-r..=r).zip(&w) {
-                let j = f as i64 + k;
-                if j >= 0 && (j as usize) < t {
-                    acc += wk * x[j as usize];
-                    norm += wk;
-                }
-            }
-            let centre = (acc / norm) as f32;
+        for (f, centre) in gaussian_smooth(&x, sigma, Ends::Renormalise)
+            .into_iter()
+            .enumerate()
+        {
+            let centre = centre as f32;
             let outside = centre - centre.clamp(-half, half);
             frames[f * DIMS + c] -= outside;
         }
