@@ -8,8 +8,10 @@ Subcommands:
   report  collect the `dancegen eval` JSON files, compute the boundary-jerk ratio at the real
           window boundaries of each sampler, and write the Markdown report
 
-The boundary-jerk ratio is recomputed here because `dancegen eval` places its boundaries every
-150 frames (EDGE's 5 s windows) and takes no window length; the definition is the one of
+The boundary-jerk ratio is recomputed here because `dancegen eval` places its boundaries at
+multiples of one window length (`--window`, default 150 = EDGE's 5 s), while the seams of these
+samplers are not evenly spaced (cue seams 4 frames inside each window, autoregressive and EDGE
+strides); the definition is the one of
 `dancegen_metrics::longform::boundary_jerk_ratio` (checked against eval's own values at
 150-frame boundaries in every run, see `parity` in the report).
 """
@@ -375,8 +377,9 @@ def cmd_report(args):
         w(f"  Check: the real clips' BAS reproduces the `bas_after` the data set builder recorded "
           f"for them (largest difference {max(diffs):.1e}), so the beats are the ones the warp "
           f"aligned the motion to.")
-    w(f"- **Boundary jerk**: `dancegen eval` puts its boundaries every 150 frames (EDGE's 5 s "
-      f"windows) and takes no window length, so the ratio is recomputed by "
+    w(f"- **Boundary jerk**: `dancegen eval --window N` puts its boundaries at multiples of N "
+      f"(default 150, EDGE's 5 s windows), but these samplers' seams are not evenly spaced, so "
+      f"the ratio is recomputed by "
       f"`tools/solo_eval.py` with the same definition "
       f"(`dancegen_metrics::longform::boundary_jerk_ratio`, ±{BOUNDARY_BAND}-frame band) at the "
       f"frames where each sampler's output changes source: Lodge++ and its two ablations at "
@@ -573,9 +576,8 @@ def cmd_report(args):
     w("- **Short segments for the long-form metrics.** A 16–20 s segment has only 3–4 window "
       "boundaries and 16–19 one-second windows; the long-form rows are the ones to read for "
       "boundary jerk and freezing.")
-    w("- Boundary jerk is recomputed outside `dancegen eval` (see above): `eval` needs a way "
-      "to give the window length or boundaries (e.g. `--window N` / `--boundaries`) to "
-      "compute it itself.")
+    w("- Boundary jerk is recomputed outside `dancegen eval` (see above): `eval --window N` "
+      "covers evenly spaced window starts only; it has no option for a list of boundaries.")
     w("")
     w("## Generation time")
     w("")

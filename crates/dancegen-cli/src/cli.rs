@@ -187,6 +187,10 @@ pub struct EvalArgs {
     /// Song to compute the music beats from (at the motion's frame rate, 30 or 60).
     #[arg(long)]
     pub music: Option<PathBuf>,
+    /// Frames between the window boundaries `boundary_jerk` looks at (the generator's window:
+    /// 150 for EDGE's 5 s at 30 fps, 128 for dancegen's Lodge++).
+    #[arg(long, default_value_t = 150, value_parser = clap::value_parser!(u64).range(2..))]
+    pub window: u64,
     /// Write the results as JSON.
     #[arg(long, value_name = "OUT")]
     pub json: Option<PathBuf>,

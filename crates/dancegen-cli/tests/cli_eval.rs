@@ -491,3 +491,54 @@ fn penetration_key_in_json() {
     let j = read_json(&out);
     assert_eq!(j["penetration"].as_f64(), Some(mean), "{j}");
 }
+
+#[test]
+fn window_sets_the_boundaries_of_boundary_jerk() {
+    // Smooth swaying joints with a 10 cm jump every 100 frames: jerky at 100-frame boundaries,
+    // ordinary at the default 150-frame ones (except where they meet, at 300).
+    let dir = tempfile::tempdir().unwrap();
+    let (t, j) = (600usize, 24usize);
+    let mut data = Vec::with_capacity(t * j * 3);
+    for f in 0..t {
+        let jump = 0.1 * (f / 100) as f32;
+        for k in 0..j {
+            let phase = f as f32 / 30.0 + k as f32;
+            data.extend([
+                0.2 * phase.sin() + jump,
+                1.0 + 0.03 * k as f32,
+                0.1 * (1.3 * phase).cos(),
+            ]);
+        }
+    }
+    let clip = dir.path().join("jumps.npy");
+    dancegen_io::write_npy_f32(&clip, &[t, j, 3], &data).unwrap();
+    let ratio = |window: Option<&str>| -> f64 {
+        let out = dir.path().join("bj.json");
+        let mut args = vec![
+            "eval",
+            "--pred",
+            s(&clip),
+            "--fps",
+            "30",
+            "--metrics",
+            "boundary_jerk",
+            "--json",
+            s(&out),
+        ];
+        if let Some(w) = window {
+            args.extend(["--window", w]);
+        }
+        ok(&dancegen(&args));
+        read_json(&out)["boundary_jerk"].as_f64().unwrap()
+    };
+    let at_100 = ratio(Some("100"));
+    let at_150 = ratio(None);
+    assert!(at_100 > 5.0, "jumps at every 100-frame boundary: {at_100}");
+    assert!(
+        at_100 > 2.0 * at_150,
+        "100: {at_100}, default 150: {at_150}"
+    );
+    let o = dancegen(&["eval", "--pred", s(&clip), "--fps", "30", "--window", "1"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--window"), "{}", stderr(&o));
+}

@@ -5,8 +5,8 @@
 //!
 //! - Solo metrics, per clip: `bas` (needs `--beats` or `--music`), `pfc` (EDGE, on the Z-up
 //!   rotation `(x, −z, y)`), `fsr` (LODGE foot-skating ratio), `mpjpe` (against the `--gt` clip of
-//!   the same file stem), `freeze`, `boundary_jerk` (boundaries every 150 frames, EDGE's 5-second
-//!   windows at 30 fps), `fsd` (Duolando foot-skating duration in %, pooled over all clips' frame
+//!   the same file stem), `freeze`, `boundary_jerk` (boundaries every `--window` frames, default 150:
+//!   EDGE's 5-second windows at 30 fps), `fsd` (Duolando foot-skating duration in %, pooled over all clips' frame
 //!   steps as the reference prints it), `penetration` (percent of forearm/hand samples inside
 //!   another body part, on the capsule body: our approximation of Lodge++'s self-penetration
 //!   ratio, see `dancegen_metrics::penetration`). Over the set: `fid_k`, `fid_g`, `div_k`,
@@ -261,7 +261,7 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
                     None => (None, true),
                 },
                 other => (
-                    solo::over_dancers(clip, |d| solo::clip_metric(other, d))
+                    solo::over_dancers(clip, |d| solo::clip_metric(other, d, args.window as usize))
                         .with_context(|| format!("{}: {other}", clip.path.display()))?,
                     false,
                 ),

@@ -11,9 +11,6 @@ use dancegen_metrics::protocol::{Prepared, Protocol};
 use super::input::Clip;
 use crate::cli::EvalArgs;
 
-/// Frames between the boundaries of `boundary_jerk` (EDGE's 5 s windows at 30 fps).
-const BOUNDARY_EVERY: usize = 150;
-
 /// Kinetic (`k`) or geometric (`g`) features of every dancer of every clip, stored as float32
 /// as the references do.
 pub fn features(set: &[Clip], kind: &str, protocol: &Protocol) -> Result<Vec<Vec<f64>>> {
@@ -53,8 +50,9 @@ pub fn over_dancers(
     Ok(super::mean(&vals))
 }
 
-/// A per-clip metric that needs nothing but the dancer's own motion.
-pub fn clip_metric(m: &str, p: &Prepared) -> Result<Option<f64>> {
+/// A per-clip metric that needs nothing but the dancer's own motion; `window` is the frames
+/// between the boundaries of `boundary_jerk`.
+pub fn clip_metric(m: &str, p: &Prepared, window: usize) -> Result<Option<f64>> {
     Ok(match m {
         "pfc" => {
             // EDGE's PFC is Z-up: (x, y, z) → (x, −z, y).
@@ -77,7 +75,7 @@ pub fn clip_metric(m: &str, p: &Prepared) -> Result<Option<f64>> {
         "freeze" => dancegen_metrics::longform::motion_freezing(&p.joints, p.fps)?,
         "boundary_jerk" => {
             let b: Vec<usize> = (1..)
-                .map(|i| i * BOUNDARY_EVERY)
+                .map(|i| i * window)
                 .take_while(|&b| b < p.frames)
                 .collect();
             if b.is_empty() {
