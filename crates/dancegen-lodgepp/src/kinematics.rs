@@ -111,16 +111,26 @@ pub fn joints_host(raw: &[f32], skeleton: &FkSkeleton) -> Vec<f32> {
         .flat_map(|f| f[4..7].iter().copied())
         .collect();
     let mats = rotation::rot6d_to_matrix(&d6);
+    host_fk::forward_kinematics(
+        &host_skeleton(skeleton),
+        LocalRotations::Matrix(&mats),
+        &root,
+        false,
+    )
+    .expect("one matrix per joint and frame")
+    .positions
+}
+
+/// The motion crate's skeleton of `skeleton` (for the host-side FK and IK).
+pub fn host_skeleton(skeleton: &FkSkeleton) -> Skeleton {
+    let j = skeleton.parents.len();
     // FkSkeleton comes from a motion-crate skeleton (`FkSkeleton::smpl24`), so it is valid.
-    let skel = Skeleton::new(
+    Skeleton::new(
         (0..j).map(|k| format!("joint{k}")).collect(),
         skeleton.parents.clone(),
         skeleton.offsets.clone(),
     )
-    .expect("FkSkeleton is a valid skeleton");
-    host_fk::forward_kinematics(&skel, LocalRotations::Matrix(&mats), &root, false)
-        .expect("one matrix per joint and frame")
-        .positions
+    .expect("FkSkeleton is a valid skeleton")
 }
 
 /// The four foot joints `[B, T, 4, 3]` of world joints `[B, T, 24, 3]`.

@@ -12,11 +12,10 @@ use dancegen_motion::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
 use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, planted_feet_offsets};
 use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
 use dancegen_motion::rotation::Mat3;
-use dancegen_motion::skeleton::Skeleton;
 use dancegen_nn::loss::FkSkeleton;
 
 use crate::foot_refine::CONTACT_HEIGHT;
-use crate::kinematics::joints_host;
+use crate::kinematics::{host_skeleton, joints_host};
 use crate::layout::{CONTACTS, DIMS, FEET, ROOT_HORIZONTAL, ROT6D_START};
 use crate::smoothing::{Ends, gaussian_smooth};
 
@@ -63,14 +62,8 @@ pub fn pin_planted_feet(frames: &mut [f32]) -> FootIkReport {
         return FootIkReport::default();
     };
     let t = frames.len() / DIMS;
-    let skel = FkSkeleton::smpl24();
-    let j = skel.parents.len();
-    let skeleton = Skeleton::new(
-        (0..j).map(|k| format!("joint{k}")).collect(),
-        skel.parents.clone(),
-        skel.offsets.clone(),
-    )
-    .expect("FkSkeleton is a valid skeleton");
+    let skeleton = host_skeleton(&FkSkeleton::smpl24());
+    let j = skeleton.len();
     let mut local: Vec<Mat3> = frames
         .chunks_exact(DIMS)
         .flat_map(|f| {

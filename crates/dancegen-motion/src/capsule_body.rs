@@ -110,6 +110,7 @@ const fn cap(
     }
 }
 
+use crate::vec3::{dot, lerp, sub};
 use BodyPart::*;
 use Side::*;
 
@@ -178,25 +179,6 @@ pub fn penetration_pairs() -> Vec<(usize, usize)> {
         .iter()
         .flat_map(|&s| penetration_targets(s).into_iter().map(move |t| (s, t)))
         .collect()
-}
-
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[inline]
-fn lerp(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
-    [
-        a[0] + s * (b[0] - a[0]),
-        a[1] + s * (b[1] - a[1]),
-        a[2] + s * (b[2] - a[2]),
-    ]
 }
 
 /// Joint `j` of frame `t` of a flat `(T, 24, 3)` array.

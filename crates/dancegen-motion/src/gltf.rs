@@ -29,6 +29,7 @@
 
 use crate::rotation::Quat;
 use crate::skeleton::Skeleton;
+use crate::vec3::{add, cross, norm, scale, sub};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -448,30 +449,6 @@ fn min_max3(v: &[f32]) -> (Vec<f64>, Vec<f64>) {
         lo.iter().map(|&x| f64::from(x)).collect(),
         hi.iter().map(|&x| f64::from(x)).collect(),
     )
-}
-
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    a.map(|v| v * s)
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 /// The bind-pose body: one capsule per bone.

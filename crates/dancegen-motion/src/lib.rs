@@ -20,6 +20,7 @@ pub mod retarget;
 pub mod rotation;
 pub mod skeleton;
 pub mod smpl_npz;
+pub mod vec3;
 
 pub use fk::{FkError, FkOutput, LocalRotations, forward_kinematics};
 pub use rotation::{Mat3, Quat};

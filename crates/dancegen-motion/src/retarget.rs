@@ -32,6 +32,7 @@ use crate::bvh::Bvh;
 use crate::bvh_motion::{BvhMotionError, bvh_world_transforms, smpl_fk_f64};
 use crate::rotation::Mat3;
 use crate::skeleton::{SMPL24_NAMES, Skeleton};
+use crate::vec3::{norm, sub};
 
 /// Where a bone of the source ends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -197,40 +198,8 @@ impl fmt::Display for RetargetReport {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     norm(sub(a, b))
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// Smallest rotation taking direction `a` to direction `b`.
-fn align(a: [f64; 3], b: [f64; 3]) -> Mat3 {
-    let (na, nb) = (norm(a), norm(b));
-    if na == 0.0 || nb == 0.0 {
-        return Mat3::IDENTITY;
-    }
-    let c = cross(a, b);
-    let s = norm(c);
-    let d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let angle = s.atan2(d);
-    if s < 1e-12 {
-        return Mat3::IDENTITY; // parallel (antiparallel does not occur between T-poses)
-    }
-    Mat3::from_axis_angle([c[0] / s * angle, c[1] / s * angle, c[2] / s * angle])
 }
 
 fn idx(bvh: &Bvh, name: &str) -> Result<usize, BvhMotionError> {
@@ -291,7 +260,7 @@ pub fn retarget_poser_to_smpl(
                     .ok_or_else(|| BvhMotionError::MissingJoint(format!("{name} End Site")))?,
             };
             let d_smpl = sub(smpl_rest[c], smpl_rest[j]);
-            align_m[j] = align(d_smpl, d_src);
+            align_m[j] = Mat3::between(d_smpl, d_src);
         }
     }
     let (lt, rt) = (idx(bvh, "lThigh")?, idx(bvh, "rThigh")?);

@@ -9,6 +9,8 @@
 
 use std::f64::consts::PI;
 
+use crate::vec3::{cross, dot, norm, scale};
+
 /// Below this angle (radians) the trigonometric ratios are replaced by their Taylor series, so
 /// that `sin θ / θ` and friends never divide by a tiny number. At 1e-4 the first dropped term is
 /// of order θ⁴/120 ≈ 1e-18, below `f64` resolution.
@@ -35,20 +37,6 @@ pub struct Mat3(pub [[f64; 3]; 3]);
 #[error("invalid Euler order {order:?}: expected three distinct axes from X, Y, Z (e.g. \"ZXY\")")]
 pub struct EulerOrderError {
     pub order: String,
-}
-
-#[inline]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// Normalises like `torch.nn.functional.normalize` (divide by `max(|v|, eps)`), so a zero input
@@ -251,6 +239,31 @@ impl std::ops::Mul for Mat3 {
 
 impl Mat3 {
     pub const IDENTITY: Mat3 = Mat3([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+
+    /// The smallest rotation taking direction `from` to direction `to` (identity if either is
+    /// zero; a half turn about an axis perpendicular to `from` if they are opposite).
+    pub fn between(from: [f64; 3], to: [f64; 3]) -> Mat3 {
+        let (nf, nt) = (norm(from), norm(to));
+        if nf < 1e-12 || nt < 1e-12 {
+            return Mat3::IDENTITY;
+        }
+        let c = cross(from, to);
+        let s = norm(c);
+        let angle = s.atan2(dot(from, to));
+        if s < 1e-12 {
+            if angle.abs() < 1e-6 {
+                return Mat3::IDENTITY;
+            }
+            let helper = if from[0].abs() < 0.9 * nf {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            let axis = cross(from, helper);
+            return Mat3::from_axis_angle(scale(axis, PI / norm(axis)));
+        }
+        Mat3::from_axis_angle(scale(c, angle / s))
+    }
 
     /// Matrix product `self · rhs` (apply `rhs` first, then `self`, to column vectors).
     #[inline]
@@ -583,7 +596,26 @@ pub fn quat_to_axis_angle(q: &[f32]) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::vec3;
     use std::f64::consts::FRAC_PI_2;
+
+    #[test]
+    fn between_turns_one_direction_onto_another_even_the_opposite_one() {
+        for (a, b) in [
+            ([1.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+            ([0.3, -0.2, 0.9], [-0.3, 0.2, -0.9]),
+            ([0.0, 0.0, 1.0], [0.0, 0.0, 3.0]),
+        ] {
+            let r = Mat3::between(a, b);
+            let got = r.mul_vec(a);
+            let want = vec3::scale(b, vec3::norm(a) / vec3::norm(b));
+            assert!(
+                vec3::norm(vec3::sub(got, want)) < 1e-9,
+                "{a:?} → {b:?}: {got:?}"
+            );
+        }
+    }
 
     /// Deterministic LCG (Numerical Recipes constants) so tests need no `rand` dependency.
     struct Lcg(u64);
