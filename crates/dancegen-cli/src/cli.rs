@@ -334,6 +334,9 @@ pub enum DatasetCommand {
 pub enum PairingArg {
     /// Time-warp each motion onto a song's beats (a pseudo-pairing, not ground truth).
     Pseudo,
+    /// Couples (`<dancer>_<take>` file pairs, or two-dancer group files) time-warped by one
+    /// warp per couple; one clip per role assignment, the partner under leader/.
+    Duet,
     /// AIST++ layout under --root: motions/*.pkl, wav/<music id>.wav, splits/.
     Aistpp,
     /// FineDance layout under --root: motion/*.npy, music_wav/*.wav, label_json/*.json.

@@ -36,6 +36,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         out: args.output.clone(),
         pairing: match args.pairing {
             PairingArg::Pseudo => Pairing::Pseudo,
+            PairingArg::Duet => Pairing::Duet,
             PairingArg::Aistpp => Pairing::Aistpp,
             PairingArg::Finedance => Pairing::FineDance,
         },

@@ -218,7 +218,9 @@ pub(crate) fn build_layout(
     let mut pairs = match opts.pairing {
         Pairing::Aistpp => aistpp_pairs(opts)?,
         Pairing::FineDance => finedance_pairs(opts)?,
-        Pairing::Pseudo => unreachable!("build_layout is only called for the layouts"),
+        Pairing::Pseudo | Pairing::Duet => {
+            unreachable!("build_layout is only called for the layouts")
+        }
     };
     let known: BTreeSet<String> = pairs
         .iter()

@@ -6,14 +6,17 @@
 //! OUT/motion/<clip>.npz        SMPL 24 motion, 30 fps, Y-up, metres (AMASS-style npz,
 //!                              read back by dancegen_motion::formats::load_motion_file)
 //! OUT/music/<clip>.npy         (T, 35) float32 EDGE-35 features at 30 fps, T = motion frames
-//! OUT/held_out/{motion,music}/ the same for held-out clips (evaluation only)
+//! OUT/leader/<clip>.npz        duet data sets only: the partner the clip's dancer follows
+//! OUT/held_out/{motion,music,leader}/ the same for held-out clips (evaluation only)
 //! OUT/manifest.json            see [`manifest::Manifest`]
 //! ```
 //!
-//! Three ways to pair ([`Pairing`]):
+//! Four ways to pair ([`Pairing`]):
 //! - **pseudo** ([`Pairing::Pseudo`]): no data set here pairs dance with music, so each motion
 //!   is time-warped onto the beats of a song ([`warp`]). This is a documented *pseudo*-pairing,
 //!   not ground truth: the dancer never heard that song.
+//! - **duet** ([`Pairing::Duet`]): couples recorded together, one warp for both partners,
+//!   one clip per role assignment ([`duet`]).
 //! - **aistpp** / **finedance**: the data sets' own pairing ([`layouts`]).
 //!
 //! Music features are computed once per song over the whole song (as the reference repos do)
@@ -22,6 +25,7 @@
 //!
 //! This crate has no deep-learning dependencies.
 
+pub mod duet;
 pub mod error;
 pub mod genre;
 pub mod layouts;
@@ -62,6 +66,9 @@ const SONG_FILL: f64 = 0.9;
 pub enum Pairing {
     /// Beat-warp pseudo-pairing of `--motion` files with `--music` songs.
     Pseudo,
+    /// Beat-warp pseudo-pairing of couples (`--motion` files of two partners each) with songs;
+    /// see [`duet`].
+    Duet,
     /// AIST++ layout under `root` (`motions/*.pkl`, `wav/<music id>.wav`, `splits/`).
     Aistpp,
     /// FineDance layout under `root` (`motion/*.npy`, `music_wav/*.wav`, `label_json/*.json`).
@@ -167,12 +174,12 @@ impl Song {
     }
 
     /// Feature rows `start..start + n`, flattened.
-    fn rows(&self, start: usize, n: usize) -> Vec<f32> {
+    pub(crate) fn rows(&self, start: usize, n: usize) -> Vec<f32> {
         self.features.data[start * EDGE35_DIM..(start + n) * EDGE35_DIM].to_vec()
     }
 
     /// Beats in `start..start + n`, relative to `start`.
-    fn beats_in(&self, start: usize, n: usize) -> Vec<usize> {
+    pub(crate) fn beats_in(&self, start: usize, n: usize) -> Vec<usize> {
         self.beat_frames
             .iter()
             .filter(|&&b| b >= start && b < start + n)
@@ -206,7 +213,7 @@ pub fn bas_bailando(joints: &[f64], music_beats: &[usize]) -> Option<f64> {
     beat_align_score(&music, &motion, Variant::Bailando)
 }
 
-fn world_joints(m: &SmplMotion, source: &Path) -> Result<Vec<f64>, DatasetError> {
+pub(crate) fn world_joints(m: &SmplMotion, source: &Path) -> Result<Vec<f64>, DatasetError> {
     let j = m
         .joints_world()
         .map_err(|e| DatasetError::input(source, format!("forward kinematics failed: {e}")))?;
@@ -303,6 +310,63 @@ pub(crate) fn write_clip(out: &Path, c: &ClipData) -> Result<ClipEntry, DatasetE
         frames,
         pairing: c.pairing,
         warp: c.warp.clone(),
+        leader: None,
+    })
+}
+
+/// Writes one role assignment of a couple: `follower` as the clip's motion, `leader` under
+/// `leader/`, both lowered by one shared floor height (the partners stand on the same floor).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn write_couple_clip(
+    out: &Path,
+    name: &str,
+    unit: &MotionUnit,
+    song: &Path,
+    start_frame: usize,
+    follower: &SmplMotion,
+    leader: &SmplMotion,
+    music: Vec<f32>,
+    warp: WarpReport,
+    held_out: bool,
+) -> Result<ClipEntry, DatasetError> {
+    use dancegen_motion::repr::motion::GroundMode;
+    let frames = follower.frames();
+    let prefix = if held_out { "held_out/" } else { "" };
+    let motion_rel = format!("{prefix}motion/{name}.npz");
+    let leader_rel = format!("{prefix}leader/{name}.npz");
+    let music_rel = format!("{prefix}music/{name}.npy");
+    let mut both = world_joints(follower, &unit.source)?;
+    both.extend(world_joints(leader, &unit.source)?);
+    let both: Vec<f32> = both.into_iter().map(|v| v as f32).collect();
+    let floor = SmplMotion::ground_height(&both, GroundMode::SupportFeet);
+    let lowered = |m: &SmplMotion| {
+        let mut m = m.clone();
+        for p in m.trans.chunks_exact_mut(3) {
+            p[1] -= floor;
+        }
+        LoadedMotion::Smpl(m)
+    };
+    let opts = ConvertOptions {
+        npz_style: NpzStyle::Amass,
+        ..Default::default()
+    };
+    save_motion_file(&out.join(&motion_rel), &lowered(follower), &opts)?;
+    save_motion_file(&out.join(&leader_rel), &lowered(leader), &opts)?;
+    dancegen_io::write_npy_f32(&out.join(&music_rel), &[frames, EDGE35_DIM], &music)?;
+    let fps = f64::from(FPS);
+    Ok(ClipEntry {
+        name: name.to_string(),
+        motion: motion_rel,
+        music: music_rel,
+        genre: unit.genre.clone(),
+        source_motion: unit.source.display().to_string(),
+        source_song: song.display().to_string(),
+        song_start_s: start_frame as f64 / fps,
+        song_end_s: (start_frame + frames) as f64 / fps,
+        frames,
+        pairing: PairingKind::PseudoBeatWarp,
+        warp: Some(warp),
+        leader: Some(leader_rel),
     })
 }
 
@@ -331,6 +395,7 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
     }
     let clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
+        Pairing::Duet => duet::build_duet(opts, progress)?,
         Pairing::Aistpp | Pairing::FineDance => layouts::build_layout(opts, progress)?,
     };
     finish(&opts.out, clips)
@@ -360,7 +425,7 @@ fn finish(out: &Path, mut clips: Vec<ClipEntry>) -> Result<BuildReport, DatasetE
 }
 
 /// Motion files named by `inputs` (directories: their motion files, sorted).
-fn expand_motion_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
+pub(crate) fn expand_motion_inputs(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
     let mut out = Vec::new();
     for p in inputs {
         if p.is_dir() {
@@ -532,10 +597,10 @@ fn build_pseudo(
 }
 
 /// A motion piece and its matching against one song.
-struct PiecePlan {
-    frames: Range<usize>,
-    motion_beats: usize,
-    matched: BeatMatch,
+pub(crate) struct PiecePlan {
+    pub(crate) frames: Range<usize>,
+    pub(crate) motion_beats: usize,
+    pub(crate) matched: BeatMatch,
 }
 
 /// Splits a motion of `frames` frames into pieces short enough for a song of `song_s` seconds
@@ -552,7 +617,12 @@ fn piece_ranges(frames: usize, song_s: f64, p: &WarpParams) -> Vec<Range<usize>>
         .collect()
 }
 
-fn plan_song(joints: &[f64], frames: usize, song: &Song, p: &WarpParams) -> Vec<PiecePlan> {
+pub(crate) fn plan_song(
+    joints: &[f64],
+    frames: usize,
+    song: &Song,
+    p: &WarpParams,
+) -> Vec<PiecePlan> {
     let fps = f64::from(FPS);
     let music = song.beat_times();
     piece_ranges(frames, song.duration_s(), p)

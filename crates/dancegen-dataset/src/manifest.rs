@@ -49,6 +49,10 @@ pub struct ClipEntry {
     pub frames: usize,
     pub pairing: PairingKind,
     pub warp: Option<WarpReport>,
+    /// Duet data sets: the partner this clip's dancer follows (motion file, relative to the
+    /// manifest's directory).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leader: Option<String>,
 }
 
 /// `manifest.json`.

@@ -7,6 +7,7 @@
 //!
 //! | type | dims | frame | reference |
 //! |---|---|---|---|
+//! | [`DuetFollower`] / [`DuetLeader`] | 3 streams (upper, lower + contacts, root relative to the leader) / leader features | Y-up, leader's heading frame | ReactDance (D.5, our layout) |
 //! | [`Edge151`] | 4 contacts + 3 root + 24×6D | Z-up | EDGE (C.2) |
 //! | [`Lodge139`] | 4 contacts + 3 root + 22×6D | Y-up, grounded | LODGE (C.3) |
 //! | [`FineDance315`] / [`FineDance319`] | (4 +) 3 + 52×6D | Y-up | FineDance / LODGE (C.3) |
@@ -16,6 +17,7 @@
 //!
 //! [`MinMaxNormalizer`] is EDGE's / LODGE's per-dimension MinMax(−1, 1) normaliser (C.2).
 
+pub mod duet;
 pub mod edge151;
 pub mod finedance;
 pub mod group;
@@ -25,6 +27,7 @@ pub mod lodge139;
 pub mod motion;
 pub mod normalizer;
 
+pub use duet::{DuetFollower, DuetLeader};
 pub use edge151::Edge151;
 pub use finedance::{FineDance315, FineDance319, FineDanceMotion};
 pub use group::{GroupEdge151, GroupMotion};
