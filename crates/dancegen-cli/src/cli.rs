@@ -34,7 +34,8 @@ pub enum Command {
     /// Build training sets: motion + music pairs (beat-warp pseudo-pairing, AIST++, FineDance).
     #[command(subcommand)]
     Dataset(DatasetCommand),
-    /// Generate a solo dance for a song (Lodge++; the bundled default model).
+    /// Generate a solo dance for a song (Lodge++), or with --leader the partner of a given
+    /// leader (ReactDance); the bundled default models.
     Generate(GenerateArgs),
     /// Assemble a Lodge++ model directory from its three training runs.
     Bundle(BundleArgs),
@@ -46,8 +47,11 @@ pub enum SamplerArg {
     Lodgepp,
     /// EDGE's long-form sampling (half-overlapping windows, no primitives), for comparison.
     Edge,
-    /// Window after window, continuing the previous window (no choreography network).
+    /// Window after window, continuing the previous window (solo: no choreography network;
+    /// duet: the ablation of Blocked Local Context).
     Autoregressive,
+    /// Duet: Blocked Local Context, every block of the follower at once (ReactDance).
+    Blc,
 }
 
 #[derive(Args, Debug)]
@@ -58,9 +62,30 @@ pub struct GenerateArgs {
     /// 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
     #[arg(short, long, value_name = "FILE")]
     pub output: Vec<PathBuf>,
-    /// Model directory (default: the bundled models/lodgepp-small).
+    /// Model directory (default: the bundled models/lodgepp-small, or models/reactdance-small
+    /// with --leader).
     #[arg(long, value_name = "DIR")]
     pub model: Option<PathBuf>,
+    /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
+    /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
+    /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
+    /// which hold the follower.
+    #[arg(long, value_name = "FILE")]
+    pub leader: Option<PathBuf>,
+    /// Duet: write the follower alone to every output.
+    #[arg(long, requires = "leader")]
+    pub follower_only: bool,
+    /// Duet: guidance s of the coarse (base) HFSQ level, x̂0 = (1 + s)·cond − s·uncond
+    /// (default: the model's).
+    #[arg(long, requires = "leader")]
+    pub guidance_coarse: Option<f64>,
+    /// Duet: guidance s of the fine (residual) levels (default: the model's).
+    #[arg(long, requires = "leader")]
+    pub guidance_fine: Option<f64>,
+    /// Duet: guidance s per level, coarse first (the last value repeats), e.g. 1.5,0.5,0.5.
+    #[arg(long, requires = "leader", value_delimiter = ',', num_args = 1..,
+        conflicts_with_all = ["guidance_coarse", "guidance_fine"])]
+    pub guidance_levels: Vec<f64>,
     /// Dance genre (the model's list; default: the model's default genre).
     #[arg(long)]
     pub genre: Option<String>,
@@ -69,7 +94,8 @@ pub struct GenerateArgs {
     /// Denoising steps (default: the model's, 50).
     #[arg(long)]
     pub steps: Option<usize>,
-    /// Classifier-free guidance weight (default: the model's, 2).
+    /// Classifier-free guidance weight w (default: the model's, 2). Duet: one weight for every
+    /// level (single-scale CFG, s = w − 1) instead of the layer-wise guidance.
     #[arg(long)]
     pub guidance: Option<f64>,
     /// Start of the music to dance to (seconds).
@@ -78,8 +104,9 @@ pub struct GenerateArgs {
     /// End of the music to dance to (seconds; default: the song's end).
     #[arg(long)]
     pub end: Option<f64>,
-    #[arg(long, value_enum, default_value_t = SamplerArg::Lodgepp)]
-    pub sampler: SamplerArg,
+    /// Long-form sampler (default: lodgepp solo, blc duet).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerArg>,
     /// Switch off the Foot Refine Block (ablation).
     #[arg(long)]
     pub no_foot_refine: bool,
@@ -94,18 +121,24 @@ pub struct GenerateArgs {
 
 #[derive(Args, Debug)]
 pub struct BundleArgs {
-    /// Finished `lodgepp_vqvae` run directory.
-    #[arg(long, value_name = "RUN")]
-    pub vqvae: PathBuf,
-    /// Finished `lodgepp_gpt` run directory.
-    #[arg(long, value_name = "RUN")]
-    pub gpt: PathBuf,
-    /// Finished `lodgepp_pddm` run directory.
-    #[arg(long, value_name = "RUN")]
-    pub pddm: PathBuf,
-    /// Model name written to model.toml.
-    #[arg(long, default_value = "lodgepp-small")]
-    pub name: String,
+    /// Finished `lodgepp_vqvae` run directory (solo model).
+    #[arg(long, value_name = "RUN", requires_all = ["gpt", "pddm"], conflicts_with_all = ["hfsq", "ldm"])]
+    pub vqvae: Option<PathBuf>,
+    /// Finished `lodgepp_gpt` run directory (solo model).
+    #[arg(long, value_name = "RUN", requires = "vqvae")]
+    pub gpt: Option<PathBuf>,
+    /// Finished `lodgepp_pddm` run directory (solo model).
+    #[arg(long, value_name = "RUN", requires = "vqvae")]
+    pub pddm: Option<PathBuf>,
+    /// Finished `reactdance_hfsq` run directory (duet model).
+    #[arg(long, value_name = "RUN", requires = "ldm")]
+    pub hfsq: Option<PathBuf>,
+    /// Finished `reactdance_ldm` run directory (duet model).
+    #[arg(long, value_name = "RUN", requires = "hfsq")]
+    pub ldm: Option<PathBuf>,
+    /// Model name written to model.toml (default: lodgepp-small, or reactdance-small).
+    #[arg(long)]
+    pub name: Option<String>,
     #[arg(long)]
     pub default_genre: Option<String>,
     /// Output model directory.

@@ -1,29 +1,48 @@
-//! `dancegen bundle`: one Lodge++ model directory from its three training runs.
+//! `dancegen bundle`: one model directory from its training runs (Lodge++: three; the duet
+//! model: two).
 
 use std::io::Write;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use dancegen_train::tasks::lodgepp::assemble_bundle;
+use dancegen_train::tasks::reactdance::assemble_duet_bundle;
 
 use crate::cli::BundleArgs;
 use crate::progress::spinner;
 
 pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
+    if let (Some(hfsq), Some(ldm)) = (&args.hfsq, &args.ldm) {
+        let name = args.name.as_deref().unwrap_or("reactdance-small");
+        let pb = spinner("assembling the duet model", quiet);
+        assemble_duet_bundle(hfsq, ldm, &args.output, name)?;
+        pb.finish_and_clear();
+        if !quiet {
+            writeln!(
+                std::io::stdout().lock(),
+                "{name} -> {}",
+                args.output.display()
+            )?;
+        }
+        return Ok(());
+    }
+    let (Some(vqvae), Some(gpt), Some(pddm)) = (&args.vqvae, &args.gpt, &args.pddm) else {
+        bail!("give --vqvae, --gpt and --pddm (solo model) or --hfsq and --ldm (duet model)");
+    };
+    let name = args.name.as_deref().unwrap_or("lodgepp-small");
     let pb = spinner("assembling the model and its key-motion library", quiet);
     let clips = assemble_bundle(
-        &args.vqvae,
-        &args.gpt,
-        &args.pddm,
+        vqvae,
+        gpt,
+        pddm,
         &args.output,
-        &args.name,
+        name,
         args.default_genre.as_deref(),
     )?;
     pb.finish_and_clear();
     if !quiet {
         writeln!(
             std::io::stdout().lock(),
-            "{} ({clips} key motions in the library) -> {}",
-            args.name,
+            "{name} ({clips} key motions in the library) -> {}",
             args.output.display()
         )?;
     }

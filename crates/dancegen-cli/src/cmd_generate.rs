@@ -30,8 +30,8 @@ pub fn default_model_dir() -> PathBuf {
 
 /// Shortest song the model accepts (one PDDM window needs material to dance to).
 const MIN_SONG_SECONDS: f64 = 2.0;
-/// Motion frame rate (EDGE / Lodge++).
-const FPS: u32 = 30;
+/// Motion frame rate (EDGE / Lodge++ / ReactDance).
+pub(crate) const FPS: u32 = 30;
 /// Preview size.
 const PREVIEW_WIDTH: u32 = 640;
 const PREVIEW_HEIGHT: u32 = 480;
@@ -39,13 +39,13 @@ const PREVIEW_HEIGHT: u32 = 480;
 const GIF_FPS: f32 = 15.0;
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Out {
+pub(crate) enum Out {
     Motion,
     Gif,
     Mp4,
 }
 
-fn kind_of(p: &Path) -> Result<Out> {
+pub(crate) fn kind_of(p: &Path) -> Result<Out> {
     let ext = p
         .extension()
         .and_then(|e| e.to_str())
@@ -63,6 +63,9 @@ fn kind_of(p: &Path) -> Result<Out> {
 }
 
 pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
+    if args.leader.is_some() {
+        return crate::cmd_generate_duet::run(args, quiet);
+    }
     let outputs: Vec<PathBuf> = if args.output.is_empty() {
         vec![PathBuf::from("dance.glb")]
     } else {
@@ -146,10 +149,11 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     if let Some(w) = args.guidance {
         opts.guidance = w;
     }
-    opts.sampler = match args.sampler {
+    opts.sampler = match args.sampler.unwrap_or(SamplerArg::Lodgepp) {
         SamplerArg::Lodgepp => Sampler::Lodgepp,
         SamplerArg::Edge => Sampler::Edge,
         SamplerArg::Autoregressive => Sampler::Autoregressive,
+        SamplerArg::Blc => bail!("--sampler blc is the duet sampler (use it with --leader)"),
     };
     opts.refine = !args.no_foot_refine;
     if args.no_penetration_guidance {
@@ -187,7 +191,12 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
                 } else {
                     None
                 };
-                preview(path, &motion, *kind, audio.as_ref().map(|t| t.path()))?;
+                preview_motion(
+                    path,
+                    LoadedMotion::Smpl(motion.clone()),
+                    *kind,
+                    audio.as_ref().map(|t| t.path()),
+                )?;
             }
         }
     }
@@ -237,7 +246,11 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion> {
 }
 
 /// The song between `start` and `end` seconds as a temporary mono 16-bit WAV (for the MP4).
-fn song_segment_wav(source: &AudioSource, start: f64, end: f64) -> Result<tempfile::NamedTempFile> {
+pub(crate) fn song_segment_wav(
+    source: &AudioSource,
+    start: f64,
+    end: f64,
+) -> Result<tempfile::NamedTempFile> {
     let audio = dancegen_music::load::load_many(source, &[0], |_| {})?
         .into_iter()
         .next()
@@ -260,8 +273,12 @@ fn song_segment_wav(source: &AudioSource, start: f64, end: f64) -> Result<tempfi
     Ok(tmp)
 }
 
-fn preview(path: &Path, motion: &SmplMotion, kind: Out, audio: Option<&Path>) -> Result<()> {
-    let loaded = LoadedMotion::Smpl(motion.clone());
+pub(crate) fn preview_motion(
+    path: &Path,
+    loaded: LoadedMotion,
+    kind: Out,
+    audio: Option<&Path>,
+) -> Result<()> {
     let tracks = tracks_from_motion(path, &loaded)?;
     let opts = RenderOptions::new(PREVIEW_WIDTH, PREVIEW_HEIGHT);
     let scene = Scene::new(&tracks, &opts)?;

@@ -7,6 +7,7 @@ mod cmd_convert;
 mod cmd_dataset;
 mod cmd_features;
 mod cmd_generate;
+mod cmd_generate_duet;
 mod cmd_render;
 mod cmd_train;
 mod demo;

@@ -272,7 +272,7 @@ impl PddmDenoiser {
         let none = AttnMasks::default();
         let ctx = DecoderContext {
             memory: p.memory.clone(),
-            cond: film.clone(),
+            cond: film.clone().unsqueeze_dim(1),
             self_masks: &none,
             cross_masks: &none,
             rotary: Some(&rotary),

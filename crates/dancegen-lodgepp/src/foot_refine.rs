@@ -70,7 +70,7 @@ impl FootRefine {
         let none = Default::default();
         let ctx = DecoderContext {
             memory: tokens,
-            cond,
+            cond: cond.unsqueeze_dim(1),
             self_masks: &none,
             cross_masks: &none,
             rotary: None,

@@ -8,7 +8,7 @@
 //! | `.bvh` | any skeleton | SMPL 24 (centimetres) or the file's own skeleton |
 //! | `.npz` | AMASS-style SMPL (`poses`, `trans`, `mocap_framerate`), EDGE-style (`smpl_poses`, `smpl_trans`) | both |
 //! | `.npy` | FineDance `(T, 315)`, joints `(T, J, 3)` | world joints `(T, J, 3)` float32 |
-//! | `.glb` | – | animated skeleton + skinned capsule mesh |
+//! | `.glb` | – | animated skeleton + skinned capsule mesh; every dancer of a group |
 //! | `.json` | – | joints, skeleton and (for SMPL) poses |
 
 use std::path::{Path, PathBuf};
@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use crate::aistpp;
 use crate::bvh::{self, Bvh, BvhReadOptions, BvhWriteOptions};
 use crate::bvh_motion::{self, bvh_world_positions};
-use crate::gltf::{self, GlbOptions};
+use crate::gltf::{self, DancerAnimation, GlbOptions};
 use crate::repr::finedance::FineDanceMotion;
 use crate::repr::group::GroupMotion;
 use crate::repr::motion::SmplMotion;
@@ -156,7 +156,8 @@ pub struct ConvertOptions {
     pub fps: Option<f32>,
     /// Retarget a BVH to SMPL 24.
     pub to_smpl24: bool,
-    /// Which dancer of a group file to export to single-person formats.
+    /// Which dancer of a group file to keep. Single-person formats need one; `.glb` keeps all
+    /// dancers unless this picks one.
     pub dancer: Option<usize>,
     /// Style of `.npz` output.
     pub npz_style: NpzStyle,
@@ -302,7 +303,8 @@ fn single<'a>(path: &Path, m: &'a LoadedMotion) -> Result<&'a SmplMotion, Format
         LoadedMotion::Group(g) => Err(err(
             path,
             format!(
-                "the input has {} dancers; choose one with --dancer N (0-based)",
+                "the input has {} dancers; choose one with --dancer N (0-based), or write \
+                 .glb, .npy or .json, which hold them all",
                 g.len()
             ),
         )),
@@ -310,6 +312,25 @@ fn single<'a>(path: &Path, m: &'a LoadedMotion) -> Result<&'a SmplMotion, Format
             path,
             format!("a {} cannot be written as SMPL data", other.kind()),
         )),
+    }
+}
+
+/// The dancers of a group a multi-dancer format writes: all of them, or the one `--dancer`
+/// picks (as [`convert_motion`] would, for callers that skip it).
+fn group_members<'a>(
+    path: &Path,
+    g: &'a [SmplMotion],
+    dancer: Option<usize>,
+) -> Result<Vec<&'a SmplMotion>, FormatError> {
+    match dancer {
+        Some(d) => g.get(d).map(|s| vec![s]).ok_or_else(|| {
+            err(
+                path,
+                format!("--dancer {d}: the file has {} dancers", g.len()),
+            )
+        }),
+        None if g.is_empty() => Err(err(path, "the group has no dancers")),
+        None => Ok(g.iter().collect()),
     }
 }
 
@@ -367,19 +388,42 @@ pub fn save_motion_file(
             bvh::write_bvh_file(out, &b, &BvhWriteOptions::default()).map_err(|e| err(out, e))
         }
         "glb" => {
-            let (skel, poses, trans, fps) = match m {
+            let glb = GlbOptions::default();
+            match m {
                 LoadedMotion::Bvh(b) => {
                     let (skel, poses, trans) =
                         bvh_motion::bvh_skeleton_motion(b, 1.0).map_err(|e| err(out, e))?;
-                    (skel, poses, trans, b.nominal_fps() as f32)
+                    let fps = b.nominal_fps() as f32;
+                    gltf::write_glb(out, &skel, &poses, &trans, fps, &glb)
+                }
+                LoadedMotion::Group(g) => {
+                    let chosen = group_members(out, g, opts.dancer)?;
+                    let dancers: Vec<DancerAnimation<'_>> = chosen
+                        .iter()
+                        .map(|s| DancerAnimation {
+                            local_rotations_axis_angle: &s.poses,
+                            root_translation: &s.trans,
+                        })
+                        .collect();
+                    let fps = chosen[0].fps;
+                    if let Some((d, s)) = chosen.iter().enumerate().find(|(_, s)| s.fps != fps) {
+                        return Err(err(
+                            out,
+                            format!(
+                                "dancer {d} is at {} fps but dancer 0 at {fps}; one .glb \
+                                 animation needs one frame rate",
+                                s.fps
+                            ),
+                        ));
+                    }
+                    gltf::write_glb_multi(out, &Skeleton::smpl24(), &dancers, fps, &glb)
                 }
                 other => {
                     let s = single(out, other)?;
-                    (Skeleton::smpl24(), s.poses.clone(), s.trans.clone(), s.fps)
+                    gltf::write_glb(out, &Skeleton::smpl24(), &s.poses, &s.trans, s.fps, &glb)
                 }
-            };
-            gltf::write_glb(out, &skel, &poses, &trans, fps, &GlbOptions::default())
-                .map_err(|e| err(out, e))
+            }
+            .map_err(|e| err(out, e))
         }
         "npz" => {
             let s = single(out, m)?;

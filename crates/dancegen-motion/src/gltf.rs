@@ -1,9 +1,16 @@
-//! glTF 2.0 binary (`.glb`) export of an animated skeleton with a simple skinned body.
+//! glTF 2.0 binary (`.glb`) export of animated skeletons with a simple skinned body.
 //!
 //! The file holds one node per joint (named after the joint, same order, so node `j` is joint
 //! `j`), a `skin` over those nodes, one animation and a skinned mesh made of one tapered capsule
 //! per bone, so the figure is visible in Blender, three.js, Unity (glTFast / UniGLTF) and the
 //! Khronos validator.
+//!
+//! Several dancers ([`write_glb_multi`]) go into one scene so a duet imports as a unit: dancer
+//! `d` (0-based, as `--dancer`) owns nodes `d·(J+1) ..` — its `J` joint nodes named
+//! `dancer{d}/<joint>`, then its mesh node `dancer{d}` — plus skin `d`, mesh `d` and material
+//! `d` (colours: [`EXTRA_DANCER_COLORS`]); the body geometry, inverse bind matrices and key times
+//! are shared, and the single animation animates everyone so they stay in sync. With one dancer
+//! the names stay unprefixed (mesh node `body`), exactly as [`write_glb`] writes them.
 //!
 //! # Conventions
 //! glTF is Y-up, right-handed, metres — the same frame as [`crate::conventions`], so positions
@@ -87,6 +94,23 @@ pub enum GlbInputError {
     TimesNotIncreasing { frames: usize, fps: f32 },
     #[error("bad options: {0}")]
     Options(String),
+    #[error("no dancers to export")]
+    NoDancers,
+    #[error(
+        "dancer {dancer} has {frames} frames but dancer 0 has {first}; dancers in one file share \
+         one timeline"
+    )]
+    FrameCountMismatch {
+        dancer: usize,
+        frames: usize,
+        first: usize,
+    },
+    /// Only used with several dancers, so the message says whose data is wrong.
+    #[error("dancer {dancer}: {reason}")]
+    Dancer {
+        dancer: usize,
+        reason: Box<GlbInputError>,
+    },
 }
 
 /// A `.glb` that could not be written; both variants name the path.
@@ -113,20 +137,16 @@ pub fn write_glb(
     fps: f32,
     opts: &GlbOptions,
 ) -> Result<(), GltfError> {
-    let path = path.as_ref();
-    let bytes = glb_bytes(
+    write_glb_multi(
+        path,
         skeleton,
-        local_rotations_axis_angle,
-        root_translation,
+        &[DancerAnimation {
+            local_rotations_axis_angle,
+            root_translation,
+        }],
         fps,
         opts,
     )
-    .map_err(|reason| GltfError::Input {
-        path: path.to_path_buf(),
-        reason,
-    })?;
-    dancegen_io::write_atomic(path, |w| w.write_all(&bytes))?;
-    Ok(())
 }
 
 /// The `.glb` file contents for [`write_glb`].
@@ -137,27 +157,91 @@ pub fn glb_bytes(
     fps: f32,
     opts: &GlbOptions,
 ) -> Result<Vec<u8>, GlbInputError> {
+    glb_bytes_multi(
+        skeleton,
+        &[DancerAnimation {
+            local_rotations_axis_angle,
+            root_translation,
+        }],
+        fps,
+        opts,
+    )
+}
+
+/// One dancer's motion, laid out as the arguments of [`write_glb`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DancerAnimation<'a> {
+    /// `T×J×3` local axis-angle rotations (radians).
+    pub local_rotations_axis_angle: &'a [f32],
+    /// `T×3` pelvis world positions (metres).
+    pub root_translation: &'a [f32],
+}
+
+/// Base colours (linear RGBA) of dancers 1, 2, … — dancer 0 uses [`GlbOptions::base_color`] —
+/// cycled for larger groups: blue, green, purple, red, teal, chosen to stand apart from the
+/// default orange and from each other so partners are told apart at a glance.
+pub const EXTRA_DANCER_COLORS: [[f32; 4]; 5] = [
+    [0.10, 0.25, 0.80, 1.0],
+    [0.15, 0.60, 0.20, 1.0],
+    [0.50, 0.20, 0.70, 1.0],
+    [0.75, 0.10, 0.10, 1.0],
+    [0.10, 0.55, 0.55, 1.0],
+];
+
+/// Writes several dancers sharing one skeleton and timeline as one `.glb` scene, atomically,
+/// so a duet or group arrives in Blender or Unity already in place.
+pub fn write_glb_multi(
+    path: impl AsRef<Path>,
+    skeleton: &Skeleton,
+    dancers: &[DancerAnimation<'_>],
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<(), GltfError> {
+    let path = path.as_ref();
+    let bytes =
+        glb_bytes_multi(skeleton, dancers, fps, opts).map_err(|reason| GltfError::Input {
+            path: path.to_path_buf(),
+            reason,
+        })?;
+    dancegen_io::write_atomic(path, |w| w.write_all(&bytes))?;
+    Ok(())
+}
+
+/// The `.glb` file contents for [`write_glb_multi`]. One dancer gives exactly the bytes of
+/// [`glb_bytes`].
+pub fn glb_bytes_multi(
+    skeleton: &Skeleton,
+    dancers: &[DancerAnimation<'_>],
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, GlbInputError> {
+    if dancers.is_empty() {
+        return Err(GlbInputError::NoDancers);
+    }
     let joints = skeleton.len();
-    let rot = local_rotations_axis_angle;
-    if rot.len() % (joints * 3) != 0 {
-        return Err(GlbInputError::RotationShape {
-            len: rot.len(),
-            joints,
-        });
+    let many = dancers.len() > 1;
+    let mut frames = 0;
+    for (d, dancer) in dancers.iter().enumerate() {
+        let f = check_dancer(joints, dancer).map_err(|e| {
+            if many {
+                GlbInputError::Dancer {
+                    dancer: d,
+                    reason: Box::new(e),
+                }
+            } else {
+                e
+            }
+        })?;
+        if d == 0 {
+            frames = f;
+        } else if f != frames {
+            return Err(GlbInputError::FrameCountMismatch {
+                dancer: d,
+                frames: f,
+                first: frames,
+            });
+        }
     }
-    let frames = rot.len() / (joints * 3);
-    if frames == 0 {
-        return Err(GlbInputError::NoFrames);
-    }
-    if root_translation.len() != frames * 3 {
-        return Err(GlbInputError::TranslationShape {
-            frames,
-            got: root_translation.len(),
-            expected: frames * 3,
-        });
-    }
-    check_finite("rotation", rot)?;
-    check_finite("root translation", root_translation)?;
     if !(fps.is_finite() && fps > 0.0) {
         return Err(GlbInputError::BadFps(fps));
     }
@@ -204,7 +288,8 @@ pub fn glb_bytes(
     let mut accessors: Vec<Value> = Vec::new();
     let mut views: Vec<Value> = Vec::new();
 
-    // Mesh attributes.
+    // Mesh attributes, shared by every dancer: skin joint indices are per skin, so one body
+    // geometry serves all skins.
     let (pos_min, pos_max) = min_max3(&mesh.positions);
     let pos = bin.view(&mut views, &f32_bytes(&mesh.positions), Some(ARRAY_BUFFER));
     accessors.push(
@@ -266,7 +351,8 @@ pub fn glb_bytes(
         "count": mesh.indices.len(), "type": "SCALAR"}));
     let index_acc = accessors.len() - 1;
 
-    // Inverse bind matrices: column-major inverse of the rest world transform.
+    // Inverse bind matrices: column-major inverse of the rest world transform (shared, as
+    // every dancer has the same rest pose).
     let ibm: Vec<f32> = rest
         .iter()
         .flat_map(|p| {
@@ -283,82 +369,122 @@ pub fn glb_bytes(
     );
     let ibm_acc = accessors.len() - 1;
 
-    // Animation.
+    // Animation: one shared time accessor, then per dancer its rotations and translation.
     let tv = bin.view(&mut views, &f32_bytes(&times), None);
     accessors.push(
         json!({"bufferView": tv, "componentType": FLOAT, "count": frames,
         "type": "SCALAR", "min": [f64::from(times[0])], "max": [f64::from(times[frames - 1])]}),
     );
     let time_acc = accessors.len() - 1;
-    // Joint-major quaternions (x, y, z, w), one accessor per joint into a shared view.
-    let mut quats = vec![0f32; joints * frames * 4];
-    for j in 0..joints {
-        let mut prev: Option<Quat> = None;
-        for f in 0..frames {
-            let a = &rot[(f * joints + j) * 3..][..3];
-            let mut q = Quat::from_axis_angle([a[0] as f64, a[1] as f64, a[2] as f64]).normalize();
-            if let Some(p) = prev
-                && p.dot(q) < 0.0
-            {
-                q = -q;
+    let stride = joints + 1; // nodes (and samplers) per dancer
+    let mut samplers = Vec::with_capacity(dancers.len() * stride);
+    let mut channels = Vec::with_capacity(dancers.len() * stride);
+    for (d, dancer) in dancers.iter().enumerate() {
+        let rot = dancer.local_rotations_axis_angle;
+        let base = d * stride;
+        // Joint-major quaternions (x, y, z, w), one accessor per joint into a shared view.
+        let mut quats = vec![0f32; joints * frames * 4];
+        for j in 0..joints {
+            let mut prev: Option<Quat> = None;
+            for f in 0..frames {
+                let a = &rot[(f * joints + j) * 3..][..3];
+                let mut q =
+                    Quat::from_axis_angle([a[0] as f64, a[1] as f64, a[2] as f64]).normalize();
+                if let Some(p) = prev
+                    && p.dot(q) < 0.0
+                {
+                    q = -q;
+                }
+                prev = Some(q);
+                quats[(j * frames + f) * 4..][..4]
+                    .copy_from_slice(&[q.x as f32, q.y as f32, q.z as f32, q.w as f32]);
             }
-            prev = Some(q);
-            quats[(j * frames + f) * 4..][..4]
-                .copy_from_slice(&[q.x as f32, q.y as f32, q.z as f32, q.w as f32]);
         }
+        let qv = bin.view(&mut views, &f32_bytes(&quats), None);
+        let first_rot_acc = accessors.len();
+        for j in 0..joints {
+            accessors.push(json!({"bufferView": qv, "byteOffset": j * frames * 16,
+                "componentType": FLOAT, "count": frames, "type": "VEC4"}));
+        }
+        let trv = bin.view(&mut views, &f32_bytes(dancer.root_translation), None);
+        accessors.push(
+            json!({"bufferView": trv, "componentType": FLOAT, "count": frames,
+            "type": "VEC3"}),
+        );
+        let trans_acc = accessors.len() - 1;
+        for j in 0..joints {
+            samplers.push(json!({"input": time_acc, "output": first_rot_acc + j,
+                "interpolation": "LINEAR"}));
+            channels.push(
+                json!({"sampler": base + j, "target": {"node": base + j, "path": "rotation"}}),
+            );
+        }
+        samplers.push(json!({"input": time_acc, "output": trans_acc, "interpolation": "LINEAR"}));
+        channels.push(
+            json!({"sampler": base + joints, "target": {"node": base, "path": "translation"}}),
+        );
     }
-    let qv = bin.view(&mut views, &f32_bytes(&quats), None);
-    let first_rot_acc = accessors.len();
-    for j in 0..joints {
-        accessors.push(json!({"bufferView": qv, "byteOffset": j * frames * 16,
-            "componentType": FLOAT, "count": frames, "type": "VEC4"}));
-    }
-    let trv = bin.view(&mut views, &f32_bytes(root_translation), None);
-    accessors.push(
-        json!({"bufferView": trv, "componentType": FLOAT, "count": frames,
-        "type": "VEC3"}),
-    );
-    let trans_acc = accessors.len() - 1;
 
-    let mut samplers = Vec::with_capacity(joints + 1);
-    let mut channels = Vec::with_capacity(joints + 1);
-    for j in 0..joints {
-        samplers.push(json!({"input": time_acc, "output": first_rot_acc + j,
-            "interpolation": "LINEAR"}));
-        channels.push(json!({"sampler": j, "target": {"node": j, "path": "rotation"}}));
-    }
-    samplers.push(json!({"input": time_acc, "output": trans_acc, "interpolation": "LINEAR"}));
-    channels.push(json!({"sampler": joints, "target": {"node": 0, "path": "translation"}}));
-
-    // Nodes: joints 0..J, then the mesh node (a scene root without a transform, as the
-    // validator recommends for skinned meshes).
-    let mut nodes: Vec<Value> = (0..joints)
-        .map(|j| {
-            let mut n = json!({"name": skeleton.names()[j],
-                "translation": offsets[j].map(|v| f64::from(v as f32))});
-            let children: Vec<usize> = (j + 1..joints).filter(|&c| parents[c] == Some(j)).collect();
+    // Per dancer: joint nodes, then its mesh node (a scene root without a transform, as the
+    // validator recommends for skinned meshes). Its own mesh entry exists only to carry its
+    // own material.
+    let label = |d: usize, what: &str| {
+        if many {
+            format!("dancer{d}/{what}")
+        } else {
+            what.to_string()
+        }
+    };
+    let mut nodes: Vec<Value> = Vec::with_capacity(dancers.len() * stride);
+    let mut scene_nodes = Vec::with_capacity(dancers.len() * 2);
+    let mut skins = Vec::with_capacity(dancers.len());
+    let mut meshes = Vec::with_capacity(dancers.len());
+    let mut materials = Vec::with_capacity(dancers.len());
+    for d in 0..dancers.len() {
+        let base = d * stride;
+        for (j, (name, offset)) in skeleton.names().iter().zip(offsets).enumerate() {
+            let mut n = json!({"name": label(d, name),
+                "translation": offset.map(|v| f64::from(v as f32))});
+            let children: Vec<usize> = (j + 1..joints)
+                .filter(|&c| parents[c] == Some(j))
+                .map(|c| base + c)
+                .collect();
             if !children.is_empty() {
                 n["children"] = json!(children);
             }
-            n
-        })
-        .collect();
-    nodes.push(json!({"name": "body", "mesh": 0, "skin": 0}));
+            nodes.push(n);
+        }
+        let body = if many {
+            format!("dancer{d}")
+        } else {
+            "body".to_string()
+        };
+        nodes.push(json!({"name": body, "mesh": d, "skin": d}));
+        scene_nodes.extend([base, base + joints]);
+        skins.push(json!({"name": label(d, "skeleton"),
+            "joints": (base..base + joints).collect::<Vec<_>>(),
+            "skeleton": base, "inverseBindMatrices": ibm_acc}));
+        meshes.push(json!({"name": body, "primitives": [{
+            "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc,
+                "JOINTS_0": joints_acc, "WEIGHTS_0": weights_acc},
+            "indices": index_acc, "material": d, "mode": 4}]}));
+        let c = if d == 0 {
+            opts.base_color
+        } else {
+            EXTRA_DANCER_COLORS[(d - 1) % EXTRA_DANCER_COLORS.len()]
+        };
+        materials.push(json!({"name": body, "pbrMetallicRoughness": {
+            "baseColorFactor": c.map(f64::from), "metallicFactor": 0.0, "roughnessFactor": 0.8}}));
+    }
 
-    let c = opts.base_color;
     let doc = json!({
         "asset": {"version": "2.0", "generator": "dancegen"},
         "scene": 0,
-        "scenes": [{"name": "dancegen", "nodes": [0, joints]}],
+        "scenes": [{"name": "dancegen", "nodes": scene_nodes}],
         "nodes": nodes,
-        "skins": [{"name": "skeleton", "joints": (0..joints).collect::<Vec<_>>(),
-            "skeleton": 0, "inverseBindMatrices": ibm_acc}],
-        "meshes": [{"name": "body", "primitives": [{
-            "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc,
-                "JOINTS_0": joints_acc, "WEIGHTS_0": weights_acc},
-            "indices": index_acc, "material": 0, "mode": 4}]}],
-        "materials": [{"name": "body", "pbrMetallicRoughness": {
-            "baseColorFactor": c.map(f64::from), "metallicFactor": 0.0, "roughnessFactor": 0.8}}],
+        "skins": skins,
+        "meshes": meshes,
+        "materials": materials,
         "animations": [{"name": opts.animation_name, "samplers": samplers, "channels": channels}],
         "buffers": [{"byteLength": bin.data.len()}],
         "bufferViews": views,
@@ -368,6 +494,32 @@ pub fn glb_bytes(
         serde_json::to_vec(&doc).expect("JSON of plain values"),
         bin.data,
     ))
+}
+
+/// Validates one dancer's arrays and returns its frame count.
+fn check_dancer(joints: usize, dancer: &DancerAnimation<'_>) -> Result<usize, GlbInputError> {
+    let rot = dancer.local_rotations_axis_angle;
+    let root_translation = dancer.root_translation;
+    if rot.len() % (joints * 3) != 0 {
+        return Err(GlbInputError::RotationShape {
+            len: rot.len(),
+            joints,
+        });
+    }
+    let frames = rot.len() / (joints * 3);
+    if frames == 0 {
+        return Err(GlbInputError::NoFrames);
+    }
+    if root_translation.len() != frames * 3 {
+        return Err(GlbInputError::TranslationShape {
+            frames,
+            got: root_translation.len(),
+            expected: frames * 3,
+        });
+    }
+    check_finite("rotation", rot)?;
+    check_finite("root translation", root_translation)?;
+    Ok(frames)
 }
 
 const FLOAT: u32 = 5126;

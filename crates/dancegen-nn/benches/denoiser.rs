@@ -64,7 +64,7 @@ impl Denoiser {
         let none = AttnMasks::default();
         let ctx = DecoderContext {
             memory,
-            cond,
+            cond: cond.unsqueeze_dim(1),
             self_masks: &none,
             cross_masks: &none,
             rotary: Some(rotary),

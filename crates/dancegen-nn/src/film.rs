@@ -1,6 +1,7 @@
 //! FiLM conditioning (EDGE `DenseFiLM` + `featurewise_affine`): a conditioning vector `c` gives
 //! per-channel `(scale, shift)` = chunks of `Linear(Mish(c))`, applied as `(scale + 1)·x + shift`
-//! to every frame. ReactDance injects music this way; EDGE/Lodge the timestep + pooled music.
+//! to every frame. EDGE/Lodge condition on one vector per sequence (timestep + pooled music,
+//! `[B, 1, d]`); ReactDance injects the music this way frame by frame (`[B, T, d]`).
 
 use burn::config::Config;
 use burn::module::Module;
@@ -30,15 +31,16 @@ impl FilmConfig {
 }
 
 impl Film {
-    /// `(scale, shift)`, each `[B, 1, d]`.
-    pub fn scale_shift(&self, cond: Tensor<2>) -> (Tensor<3>, Tensor<3>) {
-        let ss = self.linear.forward(mish(cond)).unsqueeze_dim::<3>(1);
+    /// `(scale, shift)`, each shaped like `cond`: `[B, 1, d]` (one vector per sequence) or
+    /// `[B, T, d]` (one per frame).
+    pub fn scale_shift(&self, cond: Tensor<3>) -> (Tensor<3>, Tensor<3>) {
+        let ss = self.linear.forward(mish(cond));
         let d = ss.dims()[2] / 2;
         (ss.clone().narrow(2, 0, d), ss.narrow(2, d, d))
     }
 
-    /// `(scale + 1)·x + shift` for `x` `[B, T, d]`.
-    pub fn modulate(&self, x: Tensor<3>, cond: Tensor<2>) -> Tensor<3> {
+    /// `(scale + 1)·x + shift` for `x` `[B, T, d]` and `cond` `[B, 1, d]` or `[B, T, d]`.
+    pub fn modulate(&self, x: Tensor<3>, cond: Tensor<3>) -> Tensor<3> {
         let (scale, shift) = self.scale_shift(cond);
         x * (scale + 1.0) + shift
     }

@@ -161,8 +161,9 @@ impl FilmDecoderLayerConfig {
 pub struct DecoderContext<'a> {
     /// Cross-attention tokens `[B, Tm, d_context]`.
     pub memory: Tensor<3>,
-    /// FiLM conditioning vector `[B, d_model]`.
-    pub cond: Tensor<2>,
+    /// FiLM conditioning `[B, 1, d_model]` (one vector per sequence, EDGE) or `[B, T, d_model]`
+    /// (one per frame, ReactDance's music).
+    pub cond: Tensor<3>,
     pub self_masks: &'a AttnMasks,
     pub cross_masks: &'a AttnMasks,
     /// Rotary tables for the self-attention query/key input (EDGE), `[1, T, d_model]`.

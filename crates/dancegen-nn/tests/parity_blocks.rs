@@ -127,7 +127,7 @@ fn film_decoder_layer_matches_edge_formula() {
     };
     let ctx = DecoderContext {
         memory: fx.tensor("in.memory", &dev),
-        cond: fx.tensor("in.cond", &dev),
+        cond: fx.tensor::<2>("in.cond", &dev).unsqueeze_dim(1),
         self_masks: &self_masks,
         cross_masks: &AttnMasks::default(),
         rotary: Some(&rotary),

@@ -99,7 +99,7 @@ fn default_keep_checkpoints() -> usize {
 }
 
 /// `[model]` keys that hold paths (resolved like `[data] paths`).
-pub const MODEL_PATH_KEYS: &[&str] = &["vqvae"];
+pub const MODEL_PATH_KEYS: &[&str] = &["vqvae", "hfsq"];
 
 /// Per-frame vector the motion files are converted to (`dancegen_motion::repr`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -111,6 +111,9 @@ pub enum Representation {
     Lodge139,
     /// HumanML3D-style 263 (anchors.md C.6); one frame shorter than the motion.
     Humanml263,
+    /// Duet pairs (`dancegen_motion::repr::duet`): per frame the follower's 151 values
+    /// (relative to its leader) then the leader's 220 features; needs `[data] leader`.
+    Duet,
 }
 
 /// How the per-dimension statistics map the data.
@@ -149,6 +152,11 @@ pub struct DataConfig {
     /// genre-conditioned models. Clips it does not list get no genre.
     #[serde(default)]
     pub manifest: Option<PathBuf>,
+    /// Duet data: directory of each clip's leader, `<dir>/<motion file stem>.npz` (written by
+    /// `dancegen dataset build --pairing duet` as `leader/`). Required by `representation =
+    /// "duet"`.
+    #[serde(default)]
+    pub leader: Option<PathBuf>,
 }
 
 fn default_fps() -> f32 {
@@ -301,6 +309,9 @@ impl TrainConfig {
         if let Some(m) = &mut c.data.manifest {
             *m = abs(m);
         }
+        if let Some(l) = &mut c.data.leader {
+            *l = abs(l);
+        }
         // Paths inside `[model]` (e.g. the VQ-VAE run a GPT trains on) are relative to this
         // file too; resolved here so the run's own config copy (used by `--resume`) has them.
         for key in MODEL_PATH_KEYS {
@@ -358,6 +369,22 @@ impl TrainConfig {
         }
         if !(d.fps.is_finite() && d.fps > 0.0) {
             return Err(format!("[data] fps {} is not a frame rate", d.fps));
+        }
+        match (&d.leader, d.representation) {
+            (None, Representation::Duet) => {
+                return Err(
+                    "[data] representation = \"duet\" needs [data] leader = \"<dir>\"".into(),
+                );
+            }
+            (Some(_), r) if r != Representation::Duet => {
+                return Err(format!(
+                    "[data] leader is only read by representation = \"duet\", not {r:?}"
+                ));
+            }
+            (Some(l), _) if !l.is_dir() => {
+                return Err(format!("[data] leader: {}: no such directory", l.display()));
+            }
+            _ => {}
         }
         if let Some(m) = &d.music {
             if !m.dir.is_dir() {

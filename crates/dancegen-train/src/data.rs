@@ -13,7 +13,9 @@
 use std::path::{Path, PathBuf};
 
 use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
-use dancegen_motion::repr::{Edge151, HumanMl263, Lodge139, MinMaxNormalizer, SmplMotion};
+use dancegen_motion::repr::{
+    DuetFollower, DuetLeader, Edge151, HumanMl263, Lodge139, MinMaxNormalizer, SmplMotion,
+};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 
@@ -174,6 +176,7 @@ pub fn representation_dims(r: Representation) -> usize {
         Representation::Edge151 => Edge151::DIMS,
         Representation::Lodge139 => Lodge139::DIMS,
         Representation::Humanml263 => 263,
+        Representation::Duet => DuetFollower::DIMS + DuetLeader::DIMS,
     }
 }
 
@@ -182,8 +185,54 @@ fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
         Representation::Edge151 => Edge151::encode(m),
         Representation::Lodge139 => Lodge139::encode(m),
         Representation::Humanml263 => HumanMl263::encode(m),
+        Representation::Duet => unreachable!("duet clips are encoded in pairs (encode_duet)"),
     }
     .map_err(|e| e.to_string())
+}
+
+/// Duet frames `[follower 151 | leader 220]` of a follower and its leader (cut to the shorter).
+fn encode_duet(follower: &SmplMotion, leader: &SmplMotion) -> Result<Vec<f32>, String> {
+    let t = follower.frames().min(leader.frames());
+    let cut = |m: &SmplMotion| SmplMotion {
+        fps: m.fps,
+        poses: m.poses[..t * 72].to_vec(),
+        trans: m.trans[..t * 3].to_vec(),
+    };
+    let (f, l) = (cut(follower), cut(leader));
+    let fe = DuetFollower::encode(&f, &l).map_err(|e| e.to_string())?;
+    let le = DuetLeader::encode(&l).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(t * (DuetFollower::DIMS + DuetLeader::DIMS));
+    for (a, b) in fe
+        .chunks_exact(DuetFollower::DIMS)
+        .zip(le.chunks_exact(DuetLeader::DIMS))
+    {
+        out.extend_from_slice(a);
+        out.extend_from_slice(b);
+    }
+    Ok(out)
+}
+
+/// One dancer of `path` at `c.fps` as SMPL 24 (BVH retargeted).
+fn load_dancers(path: &Path, c: &DataConfig) -> Result<Vec<SmplMotion>, TrainError> {
+    let data_err = |reason: String| TrainError::Data {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let loaded = load_motion_file(path).map_err(|e| data_err(e.reason))?;
+    let opts = ConvertOptions {
+        fps: Some(c.fps),
+        to_smpl24: matches!(loaded, LoadedMotion::Bvh(_)),
+        ..Default::default()
+    };
+    match convert_motion(path, loaded, &opts).map_err(|e| data_err(e.reason))? {
+        LoadedMotion::Smpl(m) => Ok(vec![m]),
+        LoadedMotion::Group(g) => Ok(g),
+        other => Err(data_err(format!(
+            "{} has no joint rotations; {:?} needs SMPL rotations",
+            other.kind(),
+            c.representation
+        ))),
+    }
 }
 
 /// The motion files named by `paths` (directories expanded, sorted).
@@ -221,22 +270,23 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
         path: path.to_path_buf(),
         reason,
     };
-    let loaded = load_motion_file(path).map_err(|e| data_err(e.reason))?;
-    let opts = ConvertOptions {
-        fps: Some(c.fps),
-        to_smpl24: matches!(loaded, LoadedMotion::Bvh(_)),
-        ..Default::default()
-    };
-    let dancers = match convert_motion(path, loaded, &opts).map_err(|e| data_err(e.reason))? {
-        LoadedMotion::Smpl(m) => vec![m],
-        LoadedMotion::Group(g) => g,
-        other => {
-            return Err(data_err(format!(
-                "{} has no joint rotations; {:?} needs SMPL rotations",
-                other.kind(),
-                c.representation
-            )));
+    let dancers = load_dancers(path, c)?;
+    let leader = match &c.leader {
+        Some(dir) => {
+            let stem = path.file_stem().unwrap_or_default();
+            let lp = dir.join(stem).with_extension("npz");
+            let mut l = load_dancers(&lp, c)?;
+            if l.len() != 1 || dancers.len() != 1 {
+                return Err(data_err(format!(
+                    "a duet clip is one follower ({} dancers here) and one leader ({} in {})",
+                    dancers.len(),
+                    l.len(),
+                    lp.display()
+                )));
+            }
+            l.pop()
         }
+        None => None,
     };
     let music = match &c.music {
         Some(m) => Some(load_music(path, &m.dir, m.dims)?),
@@ -245,7 +295,11 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
     let dims = representation_dims(c.representation);
     let mut clips = Vec::new();
     for m in &dancers {
-        let mut motion = encode(c.representation, m).map_err(data_err)?;
+        let mut motion = match &leader {
+            Some(l) => encode_duet(m, l),
+            None => encode(c.representation, m),
+        }
+        .map_err(data_err)?;
         let mut frames = motion.len() / dims;
         let music = music.as_ref().map(|(feat, t)| {
             frames = frames.min(*t);

@@ -81,8 +81,8 @@ pub struct Hfsq {
 }
 
 impl Hfsq {
-    /// `s_r` as a `[1, 1, n]` row.
-    fn scale(&self, r: usize, device: &Device) -> Tensor<3> {
+    /// `s_r` as a `[1, 1, n]` row (one group's dimensions).
+    pub fn scale(&self, r: usize, device: &Device) -> Tensor<3> {
         let n = self.fsq.levels.len();
         let v: Vec<f32> = self
             .fsq
@@ -93,11 +93,16 @@ impl Hfsq {
         Tensor::<1>::from_data(TensorData::new(v, [n]), device).reshape([1, 1, n])
     }
 
-    /// `[B, T, D]` → [`QuantOutput`] (indices `[B, T, G·R]`, `levels` = the `R` level outputs).
-    pub fn forward(&self, x: Tensor<3>) -> QuantOutput {
-        let [b, t, d] = x.dims();
+    /// `s_r` as a `[1, 1, D]` row (every group).
+    pub fn level_scale(&self, r: usize, device: &Device) -> Tensor<3> {
+        Tensor::cat(vec![self.scale(r, device); self.groups], 2)
+    }
+
+    /// The `R` level outputs `s_r·v̂_r` `[B, T, D]` and the indices `[B, T, G·R]`, without the
+    /// training-time masking.
+    pub fn residual_levels(&self, x: Tensor<3>) -> (Vec<Tensor<3>>, Tensor<3, Int>) {
+        let d = x.dims()[2];
         let device = x.device();
-        let training = is_training(&x);
         let n = d / self.groups;
         let mut level_parts: Vec<Vec<Tensor<3>>> = vec![Vec::new(); self.num_levels];
         let mut indices = Vec::with_capacity(self.groups * self.num_levels);
@@ -112,36 +117,54 @@ impl Hfsq {
                 parts.push(c);
             }
         }
-        let mut levels: Vec<Tensor<3>> =
-            level_parts.into_iter().map(|p| Tensor::cat(p, 2)).collect();
-        if training {
-            if self.num_levels > 1
-                && self.residual_mask_prob > 0.0
-                && uniform(&device) < self.residual_mask_prob
-            {
-                let span = self.num_levels - 1;
-                let k = 1 + ((uniform(&device) * span as f64) as usize).min(span - 1);
-                for l in levels.iter_mut().skip(k) {
-                    *l = l.zeros_like();
-                }
-                if self.residual_noise_std > 0.0 {
-                    let noise = Tensor::<3>::random(
-                        [b, t, d],
-                        Distribution::Normal(0.0, self.residual_noise_std),
-                        &device,
-                    );
-                    levels[0] = levels[0].clone() + noise;
-                }
+        let levels = level_parts.into_iter().map(|p| Tensor::cat(p, 2)).collect();
+        (levels, Tensor::cat(indices, 2))
+    }
+
+    /// Progressive masking of level outputs (see the module documentation); a no-op unless
+    /// `levels` live on an autodiff device.
+    pub fn mask_levels(&self, mut levels: Vec<Tensor<3>>) -> Vec<Tensor<3>> {
+        let Some(first) = levels.first() else {
+            return levels;
+        };
+        if !is_training(first) {
+            return levels;
+        }
+        let device = first.device();
+        let dims = first.dims();
+        if self.num_levels > 1
+            && self.residual_mask_prob > 0.0
+            && uniform(&device) < self.residual_mask_prob
+        {
+            let span = self.num_levels - 1;
+            let k = 1 + ((uniform(&device) * span as f64) as usize).min(span - 1);
+            for l in levels.iter_mut().skip(k) {
+                *l = l.zeros_like();
             }
-            if self.code_mask_prob > 0.0 {
-                for l in levels.iter_mut() {
-                    let drop =
-                        Tensor::<3>::random([b, t, d], Distribution::Uniform(0.0, 1.0), &device)
-                            .lower_elem(self.code_mask_prob);
-                    *l = l.clone().mask_fill(drop, 0.0);
-                }
+            if self.residual_noise_std > 0.0 {
+                let noise = Tensor::<3>::random(
+                    dims,
+                    Distribution::Normal(0.0, self.residual_noise_std),
+                    &device,
+                );
+                levels[0] = levels[0].clone() + noise;
             }
         }
+        if self.code_mask_prob > 0.0 {
+            for l in levels.iter_mut() {
+                let drop = Tensor::<3>::random(dims, Distribution::Uniform(0.0, 1.0), &device)
+                    .lower_elem(self.code_mask_prob);
+                *l = l.clone().mask_fill(drop, 0.0);
+            }
+        }
+        levels
+    }
+
+    /// `[B, T, D]` → [`QuantOutput`] (indices `[B, T, G·R]`, `levels` = the `R` level outputs).
+    pub fn forward(&self, x: Tensor<3>) -> QuantOutput {
+        let device = x.device();
+        let (levels, indices) = self.residual_levels(x);
+        let levels = self.mask_levels(levels);
         let quantized = levels
             .iter()
             .cloned()
@@ -149,7 +172,7 @@ impl Hfsq {
             .expect("at least one level");
         QuantOutput {
             quantized,
-            indices: Tensor::cat(indices, 2),
+            indices,
             commit_loss: Tensor::zeros([1], &device),
             perplexity: None,
             levels,

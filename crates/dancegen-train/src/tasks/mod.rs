@@ -8,15 +8,18 @@ use crate::{TrainConfig, TrainError, files};
 
 pub mod lodgepp;
 pub mod motion_autoencoder;
+pub mod reactdance;
 
 pub use motion_autoencoder::MotionAutoencoderTask;
 
 /// Every `[model] kind` with a task.
-pub const KINDS: [&str; 4] = [
+pub const KINDS: [&str; 6] = [
     motion_autoencoder::KIND,
     lodgepp::VQVAE,
     lodgepp::GPT,
     lodgepp::PDDM,
+    reactdance::HFSQ,
+    reactdance::LDM,
 ];
 
 /// Starts a new run of the task `config` names (`config_path` for error messages).
@@ -47,6 +50,18 @@ pub fn train_config(
             config,
             opts,
         ),
+        reactdance::HFSQ => trainer::train(
+            &reactdance::HfsqTask::from_config(config)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
+        reactdance::LDM => trainer::train(
+            &reactdance::LdmTask::from_config(config, config_path)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }
@@ -71,6 +86,18 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
         ),
         lodgepp::PDDM => trainer::resume(
             &lodgepp::PddmTask::from_config(&config, &path)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        reactdance::HFSQ => trainer::resume(
+            &reactdance::HfsqTask::from_config(&config)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        reactdance::LDM => trainer::resume(
+            &reactdance::LdmTask::from_config(&config, &path)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,

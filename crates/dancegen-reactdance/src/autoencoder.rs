@@ -1,0 +1,219 @@
+//! The HFSQ autoencoder (paper §"HFSQ", stage 1): the follower's three streams (upper body,
+//! lower body + contacts, root relative to the leader; [`DuetFollower::STREAMS`]) each go
+//! through their own temporal conv encoder, grouped residual FSQ ([`Hfsq`]) and conv decoder.
+//!
+//! The diffusion latent is the level outputs as **normalised codes** `v̂_r ∈ [−1, 1]`
+//! (the level output divided by its scale `s_r`), laid out level-major —
+//! `[level 0: upper | lower | root][level 1: …]…` — so one LDCFG guidance scale covers one
+//! contiguous channel range, and every channel has the same range for the diffusion's x̂0 clamp.
+//! Decoding sums `s_r·v̂_r` per stream: a continuous latent that need not sit on the grid.
+//!
+//! Loss (paper: `λ_kin·L_kinematic + λ_lat·L_latent`): L1 on the features, their velocity and
+//! acceleration, plus a commitment term `‖z_e − sg(Σ_r s_r v̂_r)‖²` on the unmasked quantization.
+
+use dancegen_motion::repr::DuetFollower;
+use dancegen_nn::burn;
+use dancegen_nn::conv::{ConvCodecConfig, ConvDecoder, ConvEncoder};
+use dancegen_nn::loss::{self, Distance};
+use dancegen_nn::quant::hfsq::{Hfsq, HfsqConfig};
+
+use burn::module::Module;
+use burn::tensor::{Device, Tensor};
+
+use crate::config::HfsqAutoencoderConfig;
+
+/// One stream's encoder, quantizer and decoder.
+#[derive(Module, Debug)]
+pub struct StreamCodec {
+    pub encoder: ConvEncoder,
+    pub quantizer: Hfsq,
+    pub decoder: ConvDecoder,
+}
+
+/// See the module documentation.
+#[derive(Module, Debug)]
+pub struct HfsqAutoencoder {
+    pub streams: Vec<StreamCodec>,
+    #[module(skip)]
+    pub num_levels: usize,
+    #[module(skip)]
+    pub stream_dim: usize,
+}
+
+/// Training losses of the autoencoder.
+pub struct AutoencoderLosses {
+    pub total: Tensor<1>,
+    pub position: Tensor<1>,
+    pub velocity: Tensor<1>,
+    pub acceleration: Tensor<1>,
+    pub latent: Tensor<1>,
+}
+
+impl HfsqAutoencoderConfig {
+    pub fn init(&self, device: &Device) -> HfsqAutoencoder {
+        let sd = self.stream_dim();
+        let streams = DuetFollower::STREAMS
+            .iter()
+            .map(|r| {
+                let codec = ConvCodecConfig::new(r.len(), r.len())
+                    .with_width(self.width)
+                    .with_depth(self.depth)
+                    .with_down_t(self.down_t)
+                    .with_stride_t(2)
+                    .with_code_dim(sd);
+                StreamCodec {
+                    encoder: codec.init_encoder(device),
+                    quantizer: HfsqConfig::new(sd, self.levels.clone())
+                        .with_groups(self.groups)
+                        .with_num_levels(self.num_levels)
+                        .with_residual_mask_prob(self.residual_mask_prob)
+                        .with_residual_noise_std(self.residual_noise_std)
+                        .with_code_mask_prob(self.code_mask_prob)
+                        .init(device),
+                    decoder: codec.init_decoder(device),
+                }
+            })
+            .collect();
+        HfsqAutoencoder {
+            streams,
+            num_levels: self.num_levels,
+            stream_dim: sd,
+        }
+    }
+}
+
+fn stream_input(x: &Tensor<3>, s: usize) -> Tensor<3> {
+    let r = &DuetFollower::STREAMS[s];
+    x.clone().narrow(2, r.start, r.len())
+}
+
+impl HfsqAutoencoder {
+    /// Channels of the diffusion latent.
+    pub fn latent_dim(&self) -> usize {
+        self.num_levels * self.streams.len() * self.stream_dim
+    }
+
+    /// Reconstruction `[B, T, 151]` of normalised follower features (training: masked levels)
+    /// and the losses against the input.
+    pub fn loss(
+        &self,
+        x: Tensor<3>,
+        cfg: &HfsqAutoencoderConfig,
+    ) -> (Tensor<3>, AutoencoderLosses) {
+        let mut outs = Vec::with_capacity(self.streams.len());
+        let mut latent = None::<Tensor<1>>;
+        for (s, codec) in self.streams.iter().enumerate() {
+            let z = codec.encoder.forward(stream_input(&x, s));
+            let (levels, _) = codec.quantizer.residual_levels(z.clone());
+            let sum = levels
+                .iter()
+                .cloned()
+                .reduce(|a, b| a + b)
+                .expect("at least one level");
+            let commit = loss::commitment(z, sum);
+            latent = Some(match latent {
+                Some(l) => l + commit,
+                None => commit,
+            });
+            let masked = codec.quantizer.mask_levels(levels);
+            let q = masked.into_iter().reduce(|a, b| a + b).expect("levels");
+            outs.push(codec.decoder.forward(q));
+        }
+        let recon = Tensor::cat(outs, 2);
+        let position = loss::reconstruction(recon.clone(), x.clone(), Distance::L1);
+        let velocity = loss::velocity(recon.clone(), x.clone(), Distance::L1);
+        let acceleration = loss::acceleration(recon.clone(), x, Distance::L1);
+        let latent = latent.expect("three streams");
+        let total = position.clone() * cfg.position_weight
+            + velocity.clone() * cfg.velocity_weight
+            + acceleration.clone() * cfg.acceleration_weight
+            + latent.clone() * cfg.latent_weight;
+        (
+            recon,
+            AutoencoderLosses {
+                total,
+                position,
+                velocity,
+                acceleration,
+                latent,
+            },
+        )
+    }
+
+    /// Normalised follower features `[B, T, 151]` → the diffusion latent `[B, T / 2^down_t, C]`
+    /// (normalised codes, level-major; unmasked).
+    pub fn encode(&self, x: Tensor<3>) -> Tensor<3> {
+        let device = x.device();
+        let mut per_level: Vec<Vec<Tensor<3>>> = vec![Vec::new(); self.num_levels];
+        for (s, codec) in self.streams.iter().enumerate() {
+            let z = codec.encoder.forward(stream_input(&x, s));
+            let (levels, _) = codec.quantizer.residual_levels(z);
+            for (r, l) in levels.into_iter().enumerate() {
+                per_level[r].push(l / codec.quantizer.level_scale(r, &device));
+            }
+        }
+        Tensor::cat(per_level.into_iter().flatten().collect(), 2)
+    }
+
+    /// The diffusion latent `[B, N, C]` → follower features `[B, N·2^down_t, 151]`. With
+    /// `levels < R` only the first `levels` levels are used (the coarse motion alone).
+    pub fn decode(&self, latent: Tensor<3>) -> Tensor<3> {
+        self.decode_levels(latent, self.num_levels)
+    }
+
+    pub fn decode_levels(&self, latent: Tensor<3>, levels: usize) -> Tensor<3> {
+        let device = latent.device();
+        let sd = self.stream_dim;
+        let ns = self.streams.len();
+        let outs = self
+            .streams
+            .iter()
+            .enumerate()
+            .map(|(s, codec)| {
+                let q = (0..levels.min(self.num_levels))
+                    .map(|r| {
+                        latent.clone().narrow(2, (r * ns + s) * sd, sd)
+                            * codec.quantizer.level_scale(r, &device)
+                    })
+                    .reduce(|a, b| a + b)
+                    .expect("at least one level");
+                codec.decoder.forward(q)
+            })
+            .collect();
+        Tensor::cat(outs, 2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dancegen_nn::device;
+
+    #[test]
+    fn latent_round_trip_matches_the_quantized_reconstruction() {
+        let cfg = HfsqAutoencoderConfig {
+            width: 16,
+            depth: 1,
+            ..Default::default()
+        };
+        let dev = device::inference();
+        let ae = cfg.init(&dev);
+        let x = Tensor::<3>::random(
+            [2, 32, DuetFollower::DIMS],
+            burn::tensor::Distribution::Normal(0.0, 1.0),
+            &dev,
+        );
+        let z = ae.encode(x.clone());
+        assert_eq!(z.dims(), [2, 8, cfg.latent_dim()]);
+        // Normalised codes stay in [−1, 1].
+        let max = z.clone().abs().max().into_scalar();
+        assert!(max <= 1.0 + 1e-5, "code magnitude {max}");
+        let (recon, _) = ae.loss(x, &cfg);
+        let dec = ae.decode(z);
+        let diff = (dec - recon).abs().max().into_scalar();
+        assert!(
+            diff < 1e-4,
+            "decode(encode(x)) differs from the forward pass by {diff}"
+        );
+    }
+}

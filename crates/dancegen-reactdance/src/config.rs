@@ -1,0 +1,221 @@
+//! The model configuration (`model.toml` of a bundle, `[model]` of the training configs).
+//!
+//! ReactDance publishes no code and none of these values (anchors D.5: FSQ levels, block size,
+//! guidance scales are UNVERIFIED); every default below is our choice, sized for a model that
+//! trains on the CMU salsa couples in well under two hours on a 2-core CPU. `docs/duet-eval.md`
+//! measures them.
+
+use serde::{Deserialize, Serialize};
+
+use dancegen_motion::repr::{DuetFollower, DuetLeader};
+
+/// Motion frames per latent token: the conv encoder halves the frame rate `down_t` times.
+pub fn frames_per_token(down_t: usize) -> usize {
+    1 << down_t
+}
+
+/// The HFSQ autoencoder: one conv encoder → HFSQ → conv decoder per follower stream.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HfsqAutoencoderConfig {
+    /// Hidden channels of each stream's conv encoder / decoder.
+    pub width: usize,
+    /// Residual blocks per resolution.
+    pub depth: usize,
+    /// Halvings of the frame rate (2: 30 fps → 7.5 latent tokens per second).
+    pub down_t: usize,
+    /// HFSQ groups `G` per stream.
+    pub groups: usize,
+    /// FSQ levels of each group's dimensions (odd levels keep the grid symmetric about 0).
+    pub levels: Vec<usize>,
+    /// Residual levels `R` (level 1 = coarse, levels ≥ 2 = fine).
+    pub num_levels: usize,
+    /// Progressive masking: probability of zeroing the levels above a random level …
+    pub residual_mask_prob: f64,
+    /// … while adding Gaussian noise of this std to the base level.
+    pub residual_noise_std: f64,
+    /// Progressive masking: probability of zeroing one code dimension.
+    pub code_mask_prob: f64,
+    /// Kinematic L1 weights: features, velocity, acceleration.
+    pub position_weight: f64,
+    pub velocity_weight: f64,
+    pub acceleration_weight: f64,
+    /// Latent (commitment) loss weight.
+    pub latent_weight: f64,
+}
+
+impl Default for HfsqAutoencoderConfig {
+    fn default() -> Self {
+        Self {
+            width: 128,
+            depth: 2,
+            down_t: 2,
+            groups: 2,
+            levels: vec![7, 5, 5, 5],
+            num_levels: 3,
+            residual_mask_prob: 0.3,
+            residual_noise_std: 0.05,
+            code_mask_prob: 0.05,
+            position_weight: 1.0,
+            velocity_weight: 1.0,
+            acceleration_weight: 0.5,
+            latent_weight: 0.02,
+        }
+    }
+}
+
+impl HfsqAutoencoderConfig {
+    /// Latent channels of one stream (`G × levels.len()`).
+    pub fn stream_dim(&self) -> usize {
+        self.groups * self.levels.len()
+    }
+
+    /// Channels of one level over the three streams.
+    pub fn level_dim(&self) -> usize {
+        DuetFollower::STREAMS.len() * self.stream_dim()
+    }
+
+    /// Channels of the diffusion latent (`R` levels × 3 streams × stream dim), level-major.
+    pub fn latent_dim(&self) -> usize {
+        self.num_levels * self.level_dim()
+    }
+
+    pub fn frames_per_token(&self) -> usize {
+        frames_per_token(self.down_t)
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        if self.levels.is_empty() || self.levels.iter().any(|&l| l < 2) {
+            return Err("autoencoder.levels: every FSQ level count must be ≥ 2".into());
+        }
+        if self.groups == 0 || self.num_levels == 0 || self.width == 0 {
+            return Err("autoencoder: groups, num_levels and width must be ≥ 1".into());
+        }
+        if self.down_t == 0 || self.down_t > 4 {
+            return Err("autoencoder.down_t must be 1..=4".into());
+        }
+        Ok(())
+    }
+}
+
+/// The latent diffusion transformer.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DenoiserConfig {
+    pub d_model: usize,
+    pub n_layers: usize,
+    pub n_heads: usize,
+    pub d_ff: usize,
+    /// Transformer encoder layers over the leader tokens before cross-attention.
+    pub leader_layers: usize,
+    pub dropout: f64,
+    /// BLC block = training window, in latent tokens (60 tokens = 240 frames = 8 s).
+    pub block_tokens: usize,
+    /// Causal attention inside a block (the literal "periodic causal" reading); `false` lets a
+    /// block's tokens see each other both ways (the block-diagonal reading).
+    pub causal: bool,
+    /// Diffusion steps of the cosine schedule in training.
+    pub timesteps: usize,
+}
+
+impl Default for DenoiserConfig {
+    fn default() -> Self {
+        Self {
+            d_model: 256,
+            n_layers: 4,
+            n_heads: 8,
+            d_ff: 512,
+            leader_layers: 1,
+            dropout: 0.1,
+            block_tokens: 60,
+            causal: false,
+            timesteps: 1000,
+        }
+    }
+}
+
+impl DenoiserConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.d_model == 0 || !self.d_model.is_multiple_of(self.n_heads.max(1)) {
+            return Err("denoiser.d_model must be a positive multiple of n_heads".into());
+        }
+        if !self.d_model.is_multiple_of(2) {
+            return Err("denoiser.d_model must be even (phase-aligned encoding)".into());
+        }
+        if self.block_tokens < 2 {
+            return Err("denoiser.block_tokens must be ≥ 2".into());
+        }
+        Ok(())
+    }
+}
+
+/// Losses of the diffusion stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LatentLossWeights {
+    /// `λ_r` per residual level (missing levels use the last value).
+    pub levels: Vec<f64>,
+    /// Kinematic L1 of the decoded prediction (features, velocity).
+    pub kinematic: f64,
+    /// Leader-follower relative orientation: the decoded root rotation in the leader's heading
+    /// frame against the real one (rotation matrices, L1).
+    pub relative_orientation: f64,
+    /// Foot contact: velocity of the decoded feet (pelvis frame plus the relative root motion)
+    /// on the real follower's contact frames.
+    pub foot_contact: f64,
+    /// Independent condition dropout per level (LDCFG training), paper: 0.2.
+    pub cond_drop: f64,
+}
+
+impl Default for LatentLossWeights {
+    fn default() -> Self {
+        Self {
+            levels: vec![1.0, 0.5, 0.25],
+            kinematic: 0.5,
+            relative_orientation: 0.5,
+            foot_contact: 0.5,
+            cond_drop: 0.2,
+        }
+    }
+}
+
+impl LatentLossWeights {
+    pub fn level(&self, r: usize) -> f64 {
+        self.levels
+            .get(r)
+            .or(self.levels.last())
+            .copied()
+            .unwrap_or(1.0)
+    }
+}
+
+/// Sampling defaults a bundle ships with (the CLI overrides them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SamplingDefaults {
+    /// DDIM steps.
+    pub steps: usize,
+    /// LDCFG `s_r` per level (`w_r = 1 + s_r`); missing levels use the last value.
+    pub guidance: Vec<f64>,
+}
+
+impl Default for SamplingDefaults {
+    fn default() -> Self {
+        Self {
+            steps: 20,
+            guidance: vec![1.5, 0.5],
+        }
+    }
+}
+
+/// Leader and music channels per latent token.
+pub fn leader_token_dim(frames_per_token: usize) -> usize {
+    DuetLeader::DIMS * frames_per_token
+}
+
+/// EDGE-35 music features per frame.
+pub const MUSIC_DIMS: usize = 35;
+
+pub fn music_token_dim(frames_per_token: usize) -> usize {
+    MUSIC_DIMS * frames_per_token
+}

@@ -1,0 +1,119 @@
+//! Leader + music → follower: the whole reactive pipeline.
+//!
+//! 1. The leader's features ([`DuetLeader`]) and the music (EDGE-35 at 30 fps), padded to a
+//!    whole number of latent tokens by repeating the last frame, grouped per token.
+//! 2. The latent sampled by BLC (or the autoregressive ablation) with LDCFG ([`crate::blc`]).
+//! 3. The whole latent decoded at once by the HFSQ decoder, cut to the leader's length,
+//!    de-normalised, and put into the leader's world frame ([`DuetFollower::decode`]).
+
+use std::time::Instant;
+
+use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
+use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
+use dancegen_nn::diffusion::{BetaSchedule, Schedule};
+
+use crate::blc::{LatentSampling, sample_latent};
+use crate::bundle::DuetModel;
+use crate::config::MUSIC_DIMS;
+use crate::denoiser::DuetCond;
+
+/// A generated follower.
+pub struct Generated {
+    pub follower: SmplMotion,
+    /// Seconds spent sampling the latent and decoding it.
+    pub sample_s: f64,
+    pub decode_s: f64,
+}
+
+/// `rows` frames of `width` values padded to `frames` by repeating the last frame.
+fn pad_frames(data: &[f32], width: usize, frames: usize) -> Vec<f32> {
+    let mut v = data.to_vec();
+    let last = data[data.len() - width..].to_vec();
+    while v.len() < frames * width {
+        v.extend_from_slice(&last);
+    }
+    v
+}
+
+/// Generates the follower of `leader` (30 fps) on `music` (`(T, 35)` EDGE features at 30 fps,
+/// at least as many frames as the leader; extra frames are ignored).
+pub fn generate_follower(
+    model: &DuetModel,
+    leader: &SmplMotion,
+    music: &[f32],
+    sampling: &LatentSampling,
+    device: &Device,
+) -> Result<Generated, String> {
+    let t = leader.frames();
+    if t == 0 {
+        return Err("the leader has no frames".into());
+    }
+    if music.len() < t * MUSIC_DIMS {
+        return Err(format!(
+            "{} music frames for a {t}-frame leader",
+            music.len() / MUSIC_DIMS
+        ));
+    }
+    let ae = &model.config.autoencoder;
+    let f = ae.frames_per_token();
+    let k = t.div_ceil(f);
+    let frames = k * f;
+    let mut lead = DuetLeader::encode(leader).map_err(|e| e.to_string())?;
+    let (lm, ls) = (
+        &model.norm.mean[DuetFollower::DIMS..],
+        &model.norm.std[DuetFollower::DIMS..],
+    );
+    for row in lead.chunks_exact_mut(DuetLeader::DIMS) {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = ((f64::from(*v) - lm[j]) / ls[j]) as f32;
+        }
+    }
+    let lead = pad_frames(&lead, DuetLeader::DIMS, frames);
+    let mus = pad_frames(&music[..t * MUSIC_DIMS], MUSIC_DIMS, frames);
+    let cond = DuetCond {
+        leader: Tensor::from_data(TensorData::new(lead, [1, k, f * DuetLeader::DIMS]), device),
+        music: Tensor::from_data(TensorData::new(mus, [1, k, f * MUSIC_DIMS]), device),
+    };
+    let schedule = Schedule::new(BetaSchedule::Cosine, model.config.denoiser.timesteps);
+    let t0 = Instant::now();
+    let latent = sample_latent(
+        &model.denoiser,
+        &schedule,
+        &cond,
+        ae.latent_dim(),
+        ae.num_levels,
+        sampling,
+        device,
+    );
+    let sample_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let decoded = model.autoencoder.decode(latent).narrow(1, 0, t);
+    let mut data = decoded
+        .into_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .map_err(|e| format!("decoded latent: {e:?}"))?;
+    let (fm, fs) = (
+        &model.norm.mean[..DuetFollower::DIMS],
+        &model.norm.std[..DuetFollower::DIMS],
+    );
+    for row in data.chunks_exact_mut(DuetFollower::DIMS) {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (f64::from(*v) * fs[j] + fm[j]) as f32;
+        }
+    }
+    let follower = DuetFollower::decode(&data, leader).map_err(|e| e.to_string())?;
+    if follower
+        .trans
+        .iter()
+        .chain(&follower.poses)
+        .any(|v| !v.is_finite())
+    {
+        return Err("the model produced non-finite values".into());
+    }
+    Ok(Generated {
+        follower,
+        sample_s,
+        decode_s: t1.elapsed().as_secs_f64(),
+    })
+}
