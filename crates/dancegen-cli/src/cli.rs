@@ -258,7 +258,7 @@ pub struct ConvertArgs {
     /// Retarget to this skeleton first.
     #[arg(long, value_enum)]
     pub to: Option<TargetSkeleton>,
-    /// Dancer of a group file to export to single-person formats (0-based).
+    /// Dancer of a group file to export (single-person formats need one; .glb, .npy and .json keep every dancer unless this is given) (0-based).
     #[arg(long)]
     pub dancer: Option<usize>,
     /// Keys of an .npz output.

@@ -20,6 +20,11 @@
 //!   Bailando's `calc_db` on the dancer's own full length: mean joint speed, `gaussian_filter(σ = 5)`,
 //!   `argrelextrema(less)` (order 1). The set score is the mean over pairs.
 //!
+//! Two more duet measures, **our definitions** for ReactDance's evaluation (its code is
+//! unreleased): [`interpenetration_rate`] (IPR: share of frames in which the partners' capsule
+//! bodies intersect, TIF's geometry on a couple) and [`contact_range_share`] (share of frames in
+//! which they are within [`CONTACT_RANGE_M`] of touching).
+//!
 //! Joint layout: the reference works on SMPL-X 55-joint arrays. Our inputs are SMPL 24-joint
 //! (`(T, 24, 3)`, flat C order); they are expanded to 55 joints with [`SMPLX55_FROM_SMPL24`]
 //! (the fixtures' `manifest.json: smplx55_from_smpl24_index`: body joints 0–21 as is, jaw and
@@ -188,5 +193,66 @@ mod tests {
     fn numpy_sum_matches_plain_sum_on_integers() {
         let a: [f64; 55] = std::array::from_fn(|i| i as f64);
         assert_eq!(numpy_sum(&a), (0..55).sum::<usize>() as f64);
+    }
+}
+
+/// How close (metres, capsule surface to capsule surface) the partners must be to count as "in
+/// contact range": a forearm's length, close enough to take a hand. Our choice.
+pub const CONTACT_RANGE_M: f64 = 0.3;
+
+/// Share of frames (in `[0, 1]`) in which the couple's capsule bodies intersect; `None` for an
+/// empty clip.
+pub fn interpenetration_rate(
+    follower: &[f64],
+    leader: &[f64],
+) -> Result<Option<f64>, FeatureError> {
+    crate::group::tif(&[follower, leader], &crate::group::CapsuleRadii::default())
+}
+
+/// Share of frames (in `[0, 1]`) in which the couple's smallest capsule gap is at most
+/// [`CONTACT_RANGE_M`] (intersecting frames count as in range); `None` for an empty clip.
+pub fn contact_range_share(follower: &[f64], leader: &[f64]) -> Result<Option<f64>, FeatureError> {
+    let t = frame_count(follower)?.min(frame_count(leader)?);
+    if t == 0 {
+        return Ok(None);
+    }
+    let radii = crate::group::CapsuleRadii::default();
+    let near = (0..t)
+        .filter(|&f| crate::group::body_gap(follower, leader, f, &radii) <= CONTACT_RANGE_M)
+        .count();
+    Ok(Some(near as f64 / t as f64))
+}
+
+#[cfg(test)]
+mod couple_tests {
+    use super::*;
+
+    /// A straight vertical stick figure at horizontal `x` (every joint on the line).
+    fn stick(x: f64, frames: usize) -> Vec<f64> {
+        let mut v = Vec::new();
+        for _ in 0..frames {
+            for j in 0..24 {
+                v.extend([x, 0.05 * j as f64, 0.0]);
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn far_partners_neither_touch_nor_intersect() {
+        let (a, b) = (stick(0.0, 3), stick(3.0, 3));
+        assert_eq!(interpenetration_rate(&a, &b).unwrap(), Some(0.0));
+        assert_eq!(contact_range_share(&a, &b).unwrap(), Some(0.0));
+    }
+
+    #[test]
+    fn overlapping_partners_intersect_and_are_in_range() {
+        let (a, b) = (stick(0.0, 2), stick(0.05, 2));
+        assert_eq!(interpenetration_rate(&a, &b).unwrap(), Some(1.0));
+        assert_eq!(contact_range_share(&a, &b).unwrap(), Some(1.0));
+        // 0.1 m torso radii on both: a 0.4 m axis distance leaves a 0.2 m gap, within range.
+        let c = stick(0.4, 2);
+        assert_eq!(interpenetration_rate(&a, &c).unwrap(), Some(0.0));
+        assert_eq!(contact_range_share(&a, &c).unwrap(), Some(1.0));
     }
 }

@@ -413,6 +413,21 @@ pub fn bodies_intersect(a: &[f64], b: &[f64], t: usize, radii: &CapsuleRadii) ->
     false
 }
 
+/// Smallest surface gap (metres) between the capsule bodies of `a` and `b` at frame `t`:
+/// segment distance minus the two radii over all bone pairs; negative where they intersect.
+pub fn body_gap(a: &[f64], b: &[f64], t: usize, radii: &CapsuleRadii) -> f64 {
+    let mut best = f64::INFINITY;
+    for (ca, &pa) in SMPL_PARENTS.iter().enumerate().skip(1) {
+        let (a0, a1) = (p(a, t, pa as usize), p(a, t, ca));
+        let ra = bone_radius(ca, radii);
+        for (cb, &pb) in SMPL_PARENTS.iter().enumerate().skip(1) {
+            let d = segment_distance_sq(a0, a1, p(b, t, pb as usize), p(b, t, cb)).sqrt();
+            best = best.min(d - ra - bone_radius(cb, radii));
+        }
+    }
+    best
+}
+
 /// Per-frame flags: `true` where at least one pair of distinct dancers intersects.
 pub fn intersection_frames(
     dancers: &[&[f64]],

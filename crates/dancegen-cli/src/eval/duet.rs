@@ -4,7 +4,9 @@
 use std::collections::BTreeMap;
 
 use anyhow::{Context, Result, bail};
-use dancegen_metrics::duet::{beat_echo_degree, cross_distance_feature};
+use dancegen_metrics::duet::{
+    beat_echo_degree, contact_range_share, cross_distance_feature, interpenetration_rate,
+};
 
 use super::input::Clip;
 
@@ -85,7 +87,13 @@ pub fn features(clips: &[Clip], pairs: &[Option<Pair>]) -> Result<Vec<Vec<f64>>>
         .collect()
 }
 
-/// Beat Echo Degree of one duet.
-pub fn bed(c: &Clip, p: &Pair) -> Result<Option<f64>> {
-    beat_echo_degree(p.follower, p.leader).with_context(|| format!("{}: bed", c.path.display()))
+/// A per-duet metric: `bed` (Beat Echo Degree), `ipr`, `contact_range`.
+pub fn clip_metric(m: &str, c: &Clip, p: &Pair) -> Result<Option<f64>> {
+    match m {
+        "bed" => beat_echo_degree(p.follower, p.leader),
+        "ipr" => interpenetration_rate(p.follower, p.leader),
+        "contact_range" => contact_range_share(p.follower, p.leader),
+        other => unreachable!("{other} is not a per-duet metric"),
+    }
+    .with_context(|| format!("{}: {m}", c.path.display()))
 }

@@ -17,7 +17,9 @@
 //!   `tif` (per scene).
 //! - Duet metrics (Duolando, world positions): the follower is the `--pred` clip and its leader
 //!   the `--leader` clip of the same stem (`--gt-leader` for `--gt`), or a two-dancer clip is
-//!   `[leader, follower]`. `fid_cd` (needs GT duets), `div_cd` over the set, `bed` per duet.
+//!   `[leader, follower]`. `fid_cd` (needs GT duets), `div_cd` over the set; per duet `bed`,
+//!   `ipr` (share of frames in which the two capsule bodies intersect) and `contact_range`
+//!   (share of frames within `dancegen_metrics::duet::CONTACT_RANGE_M` of touching).
 //!
 //! A set value is the mean over the clips where the metric is defined; undefined clips are
 //! `null` in `per_clip` and warned about.
@@ -40,7 +42,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 18] = [
+const METRICS: [&str; 20] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -57,12 +59,14 @@ const METRICS: [&str; 18] = [
     "fid_cd",
     "div_cd",
     "bed",
+    "ipr",
+    "contact_range",
     "freeze",
     "boundary_jerk",
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 11] = [
+const PER_CLIP: [&str; 13] = [
     "bas",
     "pfc",
     "fsr",
@@ -74,6 +78,8 @@ const PER_CLIP: [&str; 11] = [
     "gmc",
     "tif",
     "bed",
+    "ipr",
+    "contact_range",
 ];
 
 /// What the inputs offer, to choose the default metrics and reject impossible requests.
@@ -99,7 +105,7 @@ impl Offer {
             "fid_cd" if !(self.pred_duets && self.gt_duets) => {
                 Err("needs duets in --pred and --gt (--leader / --gt-leader, or two-dancer clips)")
             }
-            "div_cd" | "bed" if !self.pred_duets => {
+            "div_cd" | "bed" | "ipr" | "contact_range" if !self.pred_duets => {
                 Err("needs duets in --pred (--leader, or two-dancer clips)")
             }
             _ => Ok(()),
@@ -111,7 +117,9 @@ impl Offer {
         match m {
             // Duet metrics by default only when leaders are given: a two-dancer scene is a group
             // unless the user asks for duet metrics.
-            "fid_cd" | "div_cd" | "bed" => !args.leader.is_empty() && self.check(m).is_ok(),
+            "fid_cd" | "div_cd" | "bed" | "ipr" | "contact_range" => {
+                !args.leader.is_empty() && self.check(m).is_ok()
+            }
             _ => self.check(m).is_ok(),
         }
     }
@@ -256,8 +264,8 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
                 }
                 // Not a scene / not a duet: nothing to measure, nothing to warn about.
                 "gmc" | "tif" => (group::clip_metric(m, clip)?, !clip.is_group()),
-                "bed" => match pair {
-                    Some(p) => (duet::bed(clip, p)?, false),
+                "bed" | "ipr" | "contact_range" => match pair {
+                    Some(p) => (duet::clip_metric(m, clip, p)?, false),
                     None => (None, true),
                 },
                 other => (
