@@ -121,10 +121,10 @@ pub struct DenoiserConfig {
 impl Default for DenoiserConfig {
     fn default() -> Self {
         Self {
-            d_model: 256,
+            d_model: 192,
             n_layers: 4,
-            n_heads: 8,
-            d_ff: 512,
+            n_heads: 6,
+            d_ff: 384,
             leader_layers: 1,
             dropout: 0.1,
             block_tokens: 60,
