@@ -206,11 +206,11 @@ mod tests {
         let z = ae.encode(x.clone());
         assert_eq!(z.dims(), [2, 8, cfg.latent_dim()]);
         // Normalised codes stay in [−1, 1].
-        let max = z.clone().abs().max().into_scalar();
+        let max = z.clone().abs().max().into_scalar::<f32>();
         assert!(max <= 1.0 + 1e-5, "code magnitude {max}");
         let (recon, _) = ae.loss(x, &cfg);
         let dec = ae.decode(z);
-        let diff = (dec - recon).abs().max().into_scalar();
+        let diff = (dec - recon).abs().max().into_scalar::<f32>();
         assert!(
             diff < 1e-4,
             "decode(encode(x)) differs from the forward pass by {diff}"
