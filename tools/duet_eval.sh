@@ -82,7 +82,11 @@ ln -f "$SRC_BIN" "$BIN" 2>/dev/null || cp -f "$SRC_BIN" "$BIN"
 log "binary: $SRC_BIN"
 
 [ -f "$DATASET/manifest.json" ] || { echo "$DATASET/manifest.json missing: build the duet data set first" >&2; exit 1; }
-rel() { realpath --relative-to="$ROOT" "$1" 2>/dev/null || echo "$1"; }
+rel() { # relative to the repository root if inside it, else absolute
+    local p
+    p=$(realpath -m "$1")
+    case $p in "$ROOT"/*) echo "${p#"$ROOT"/}" ;; *) echo "$p" ;; esac
+}
 
 # ---- configurations: model directory and flags; skipped when the model does not exist
 model_of() {

@@ -370,6 +370,9 @@ pub enum PairingArg {
     /// Couples (`<dancer>_<take>` file pairs, or two-dancer group files) time-warped by one
     /// warp per couple; one clip per role assignment, the partner under leader/.
     Duet,
+    /// DD100 (Duolando) duets under --root: motion/rotmat/{train,test}/<take>_00.npy (follower)
+    /// and _01.npy (leader), music/<any>/{train,test}/<take>.wav; test takes held out.
+    Dd100,
     /// AIST++ layout under --root: motions/*.pkl, wav/<music id>.wav, splits/.
     Aistpp,
     /// FineDance layout under --root: motion/*.npy, music_wav/*.wav, label_json/*.json.

@@ -37,6 +37,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         pairing: match args.pairing {
             PairingArg::Pseudo => Pairing::Pseudo,
             PairingArg::Duet => Pairing::Duet,
+            PairingArg::Dd100 => Pairing::Dd100,
             PairingArg::Aistpp => Pairing::Aistpp,
             PairingArg::Finedance => Pairing::FineDance,
         },

@@ -11,12 +11,13 @@
 //! OUT/manifest.json            see [`manifest::Manifest`]
 //! ```
 //!
-//! Four ways to pair ([`Pairing`]):
+//! Five ways to pair ([`Pairing`]):
 //! - **pseudo** ([`Pairing::Pseudo`]): no data set here pairs dance with music, so each motion
 //!   is time-warped onto the beats of a song ([`warp`]). This is a documented *pseudo*-pairing,
 //!   not ground truth: the dancer never heard that song.
 //! - **duet** ([`Pairing::Duet`]): couples recorded together, one warp for both partners,
 //!   one clip per role assignment ([`duet`]).
+//! - **dd100**: Duolando's duet data set under `--root` ([`dd100`]), its own pairing.
 //! - **aistpp** / **finedance**: the data sets' own pairing ([`layouts`]).
 //!
 //! Music features are computed once per song over the whole song (as the reference repos do)
@@ -25,6 +26,7 @@
 //!
 //! This crate has no deep-learning dependencies.
 
+pub mod dd100;
 pub mod duet;
 pub mod error;
 pub mod genre;
@@ -69,6 +71,8 @@ pub enum Pairing {
     /// Beat-warp pseudo-pairing of couples (`--motion` files of two partners each) with songs;
     /// see [`duet`].
     Duet,
+    /// DD100 (Duolando) duet layout under `root`; see [`dd100`].
+    Dd100,
     /// AIST++ layout under `root` (`motions/*.pkl`, `wav/<music id>.wav`, `splits/`).
     Aistpp,
     /// FineDance layout under `root` (`motion/*.npy`, `music_wav/*.wav`, `label_json/*.json`).
@@ -396,6 +400,7 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
     let clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
         Pairing::Duet => duet::build_duet(opts, progress)?,
+        Pairing::Dd100 => dd100::build_dd100(opts, progress)?,
         Pairing::Aistpp | Pairing::FineDance => layouts::build_layout(opts, progress)?,
     };
     finish(&opts.out, clips)

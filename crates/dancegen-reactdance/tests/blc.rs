@@ -3,10 +3,12 @@
 
 use dancegen_nn::burn::tensor::{Distribution, Tensor};
 use dancegen_nn::device;
-use dancegen_reactdance::blc::{LatentSampling, LongForm, level_guidance, sample_latent, to_blocks};
+use dancegen_nn::diffusion::{BetaSchedule, Guidance, Schedule};
+use dancegen_reactdance::blc::{
+    LatentSampling, LongForm, level_guidance, sample_latent, to_blocks,
+};
 use dancegen_reactdance::config::{DenoiserConfig, leader_token_dim, music_token_dim};
 use dancegen_reactdance::denoiser::{DuetCond, Layout};
-use dancegen_nn::diffusion::{BetaSchedule, Guidance, Schedule};
 
 fn small(causal: bool) -> DenoiserConfig {
     DenoiserConfig {
@@ -54,7 +56,10 @@ fn block_masked_sequence_equals_batched_blocks() {
             Layout::Batched,
         );
         let d = max_abs(seq, batched.reshape([1, n, c]));
-        assert!(d < 1e-4, "causal = {causal}: sequence and batched blocks differ by {d}");
+        assert!(
+            d < 1e-4,
+            "causal = {causal}: sequence and batched blocks differ by {d}"
+        );
     }
 }
 
@@ -95,7 +100,10 @@ fn both_long_form_samplers_fill_every_token() {
         let z = sample_latent(&net, &schedule, &cond, c, 3, &s, &dev);
         assert_eq!(z.dims(), [1, 17, c], "{long_form:?}");
         let v = z.clone().abs().max().into_scalar::<f32>();
-        assert!(v.is_finite() && v <= 1.0 + 1e-5, "{long_form:?}: |x0| = {v}");
+        assert!(
+            v.is_finite() && v <= 1.0 + 1e-5,
+            "{long_form:?}: |x0| = {v}"
+        );
         // Same seed, same latent.
         let again = sample_latent(&net, &schedule, &cond, c, 3, &s, &dev);
         assert_eq!(max_abs(z, again), 0.0, "{long_form:?} is not reproducible");
