@@ -23,7 +23,7 @@ rounds="${1:-3}"
 case="${2:-}"
 venv="${DANCEGEN_TORCH_VENV:-$here/.venv-torch}"
 threads=$(nproc)
-song="${DUET_SONG:-$root/../shared/data/music/sectoid/escape_from_chaosland.ogg}"
+song="${DUET_SONG:-$(cd "$root/.." && pwd)/shared/data/music/sectoid/escape_from_chaosland.ogg}"
 model="${DUET_MODEL:-$root/models/reactdance-small}"
 solo_model="$root/models/lodgepp-small"
 exe="$root/target/release/dancegen"
@@ -122,7 +122,7 @@ med = lambda v: statistics.median(v) if v else float("nan")
 den = sorted({r["case"] for r in rows if r["impl"] != "dancegen-e2e"})
 if den:
     steps = sorted({r.get("steps") for r in rows if r["impl"] != "dancegen-e2e"})
-    print(f"{f'duet sampler ({steps[0]} steps) + decoder':<30}{'pytorch ms':>12}{'burn ms':>12}"
+    print(f"{f'sampler ({steps[0]} steps) + HFSQ decoder':<34}{'pytorch ms':>12}{'burn ms':>12}"
           f"{'pytorch/burn':>14}  per round (pytorch / burn)")
     for c in den:
         pr, br = runs(c, "pytorch"), runs(c, "burn-flex")
@@ -130,15 +130,15 @@ if den:
         ratio = f"{p / b:.2f}x" if pr and br else "(Rust only)"
         per = ", ".join(f"{x:.0f} / {y:.0f}" for x, y in zip(pr, br)) if pr else \
             ", ".join(f"{y:.0f}" for y in br)
-        print(f"{c:<30}{p:>12.0f}{b:>12.0f}{ratio:>14}  {per}")
+        print(f"{c:<34}{p:>12.0f}{b:>12.0f}{ratio:>14}  {per}")
 e2e = [r for r in rows if r["impl"] == "dancegen-e2e"]
 if e2e:
-    print(f"\n{'dancegen generate --leader':<30}{'wall s':>10}{'generate s':>12}{'sampling s':>12}"
+    print(f"\n{'dancegen generate --leader':<34}{'wall s':>10}{'generate s':>12}{'sampling s':>12}"
           f"{'decoding s':>12}  vs 2 s")
     for r in e2e:
         s = r["median_ms"] / 1e3
         target = f"met ({2.0 / s:.2f}x under)" if s <= 2.0 else f"missed ({s / 2.0:.2f}x over)"
-        print(f"{r['case']:<30}{s:>10.2f}{r['generate_ms'] / 1e3:>12.2f}"
+        print(f"{r['case']:<34}{s:>10.2f}{r['generate_ms'] / 1e3:>12.2f}"
               f"{r['sampling_ms'] / 1e3:>12.2f}{r['decoding_ms'] / 1e3:>12.2f}  {target}")
         print(f"  {r['summary']}")
 PY

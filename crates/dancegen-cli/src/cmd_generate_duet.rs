@@ -44,7 +44,12 @@ pub fn load_leader(path: &Path) -> Result<SmplMotion> {
         fps: Some(FPS as f32),
         ..Default::default()
     };
-    let m = match convert_motion(path, loaded, &opts)? {
+    let m = match convert_motion(path, loaded, &opts).with_context(|| {
+        format!(
+            "{}: cannot use it as the leader (a humanoid skeleton retargets to SMPL 24)",
+            path.display()
+        )
+    })? {
         LoadedMotion::Smpl(m) => m,
         LoadedMotion::Group(g) => bail!(
             "{}: {} dancers; the leader must be one dancer",

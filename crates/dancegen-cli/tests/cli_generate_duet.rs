@@ -1,0 +1,199 @@
+//! The `generate --leader` contract with the bundled duet model: the follower has the leader's
+//! length at 30 fps and stays in the leader's world frame (`.npy` = the follower's world joints
+//! (T, 24, 3), metres, Y-up), couples in multi-dancer formats, and clear errors for bad leaders
+//! and short songs.
+
+mod common;
+
+use common::*;
+
+fn song() -> String {
+    shared()
+        .join("data/music/sectoid/metal_madness.ogg")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// A real leader: one partner of a CMU salsa take (BVH, retargeted by the CLI).
+fn leader_bvh() -> String {
+    shared()
+        .join("data/cmu-salsa/61_13_scaled.bvh")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn joints(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
+    let a = dancegen_io::read_npy(path).unwrap();
+    (a.shape, a.data)
+}
+
+#[test]
+fn follower_has_the_leaders_length_and_stays_near_the_leader() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &leader_bvh(),
+        "--to",
+        "smpl24",
+        "--fps",
+        "30",
+        "-o",
+        &out("leader.npy"),
+    ]));
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--leader",
+        &leader_bvh(),
+        "--steps",
+        "8",
+        "-o",
+        &out("f.npy"),
+        "-o",
+        &out("couple.glb"),
+        "-o",
+        &out("couple.json"),
+        "-o",
+        &out("f.bvh"),
+    ]);
+    ok(&o);
+    let (ls, l) = joints(&dir.path().join("leader.npy"));
+    let (fs, f) = joints(&dir.path().join("f.npy"));
+    assert_eq!(fs, ls, "follower (T, 24, 3) like the leader");
+    assert!(f.iter().all(|v| v.is_finite()));
+    // In the leader's world frame: pelvis-to-pelvis distance of a couple, not of two dancers
+    // each at their own origin.
+    let t = fs[0];
+    let mean_gap = (0..t)
+        .map(|k| {
+            let (a, b) = (k * 72, k * 72);
+            ((f[a] - l[b]).powi(2) + (f[a + 2] - l[b + 2]).powi(2)).sqrt()
+        })
+        .sum::<f64>()
+        / t as f64;
+    assert!(mean_gap < 3.0, "mean pelvis distance {mean_gap} m");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("couple.json")).unwrap()).unwrap();
+    assert_eq!(
+        json["shape"],
+        serde_json::json!([2, t, 24, 3]),
+        "[leader, follower]"
+    );
+    let glb = std::fs::read(dir.path().join("couple.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    let glb_text = String::from_utf8_lossy(&glb);
+    assert!(
+        glb_text.contains("dancer1/"),
+        "the couple's .glb holds two dancers"
+    );
+    assert!(dir.path().join("f.bvh").is_file());
+}
+
+#[test]
+fn follower_only_writes_one_dancer() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("f.glb");
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--leader",
+        &leader_bvh(),
+        "--steps",
+        "4",
+        "--follower-only",
+        "--sampler",
+        "autoregressive",
+        "--guidance-coarse",
+        "1.0",
+        "--guidance-fine",
+        "0.0",
+        "-o",
+        glb.to_str().unwrap(),
+    ]));
+    let bytes = std::fs::read(&glb).unwrap();
+    assert!(!String::from_utf8_lossy(&bytes).contains("dancer1/"));
+}
+
+#[test]
+fn a_song_shorter_than_the_leader_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.npy");
+    // metal_madness lasts 144 s; from 140 s on, 4 s remain for an 18 s leader.
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--start",
+        "140",
+        "--leader",
+        &leader_bvh(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("shorter than the leader"), "{e}");
+    assert!(!out.exists(), "no output on failure");
+}
+
+#[test]
+fn bad_leaders_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.npy");
+    let run = |leader: &std::path::Path| {
+        dancegen(&[
+            "-q",
+            "generate",
+            &song(),
+            "--leader",
+            leader.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    // A broken file.
+    let broken = dir.path().join("broken.bvh");
+    std::fs::write(&broken, b"HIERARCHY\nROOT hip\n{ OFFSET 0 0").unwrap();
+    let o = run(&broken);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("broken.bvh"), "{}", stderr(&o));
+    // A skeleton that is not a human: one bone.
+    let stick = dir.path().join("stick.bvh");
+    std::fs::write(
+        &stick,
+        "HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition \
+         Zrotation Xrotation Yrotation\n JOINT b\n {\n  OFFSET 0 1 0\n  CHANNELS 3 Zrotation \
+         Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 1 0\n  }\n }\n}\nMOTION\nFrames: 2\n\
+         Frame Time: 0.0333333\n0 0 0 0 0 0 0 0 0\n0 0 0 0 0 0 0 0 0\n",
+    )
+    .unwrap();
+    let o = run(&stick);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("stick.bvh"), "{}", stderr(&o));
+    // Joint positions only: nothing to lead with.
+    let pos = dir.path().join("positions.npy");
+    dancegen_io::write_npy_f32(&pos, &[40, 24, 3], &vec![0.5; 40 * 72]).unwrap();
+    let o = run(&pos);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("positions.npy"), "{}", stderr(&o));
+    // NaN in an otherwise valid leader.
+    let mut text =
+        std::fs::read_to_string(shared().join("data/cmu-salsa/61_13_scaled.bvh")).unwrap();
+    let motion_at = text.find("Frame Time").unwrap();
+    let line_end = motion_at + text[motion_at..].find('\n').unwrap() + 1;
+    let first_value_end = line_end + text[line_end..].find(' ').unwrap();
+    text.replace_range(line_end..first_value_end, "nan");
+    let nan = dir.path().join("nan.bvh");
+    std::fs::write(&nan, text).unwrap();
+    let o = run(&nan);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("nan.bvh") && !e.contains("panicked"), "{e}");
+    assert!(!out.exists(), "no output on failure");
+}
