@@ -5,9 +5,14 @@
 //! 2. The latent sampled by BLC (or the autoregressive ablation) with LDCFG ([`crate::blc`]).
 //! 3. The whole latent decoded at once by the HFSQ decoder, cut to the leader's length,
 //!    de-normalised, and put into the leader's world frame ([`DuetFollower::decode`]).
+//!
+//! Heights are relative to the leader's floor (its support-foot height,
+//! [`GroundMode::SupportFeet`]): the model was trained on couples standing on y = 0, and a
+//! leader recorded with another floor height gets a follower on its own floor.
 
 use std::time::Instant;
 
+use dancegen_motion::repr::motion::GroundMode;
 use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::diffusion::{BetaSchedule, Schedule};
@@ -58,6 +63,15 @@ pub fn generate_follower(
     let f = ae.frames_per_token();
     let k = t.div_ceil(f);
     let frames = k * f;
+    let floor = SmplMotion::ground_height(
+        &leader.joints_world().map_err(|e| e.to_string())?,
+        GroundMode::SupportFeet,
+    );
+    let mut grounded = leader.clone();
+    for p in grounded.trans.chunks_exact_mut(3) {
+        p[1] -= floor;
+    }
+    let leader = &grounded;
     let mut lead = DuetLeader::encode(leader).map_err(|e| e.to_string())?;
     let (lm, ls) = (
         &model.norm.mean[DuetFollower::DIMS..],
@@ -102,7 +116,10 @@ pub fn generate_follower(
             *v = (f64::from(*v) * fs[j] + fm[j]) as f32;
         }
     }
-    let follower = DuetFollower::decode(&data, leader).map_err(|e| e.to_string())?;
+    let mut follower = DuetFollower::decode(&data, leader).map_err(|e| e.to_string())?;
+    for p in follower.trans.chunks_exact_mut(3) {
+        p[1] += floor;
+    }
     if follower
         .trans
         .iter()
