@@ -33,8 +33,6 @@ pub fn default_duet_model_dir() -> PathBuf {
 
 /// Shortest leader the model accepts: one latent token.
 const MIN_LEADER_FRAMES: usize = 8;
-/// DDIM stochasticity of the duet sampler (EDGE's eta).
-const DDIM_ETA: f64 = 1.0;
 
 /// The leader file as SMPL 24 at 30 fps, or an error naming the file.
 pub fn load_leader(path: &Path) -> Result<SmplMotion> {
@@ -183,7 +181,7 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     let music = &feats.features.data[f0 * cols..(f0 + t) * cols];
     let sampling = LatentSampling {
         steps: args.steps.unwrap_or(model.config.sampling.steps),
-        eta: DDIM_ETA,
+        eta: model.config.sampling.eta,
         guidance: guidance.clone(),
         seed: args.seed,
         long_form,

@@ -38,6 +38,11 @@ pub struct BundleConfig {
     pub kind: String,
     pub name: String,
     pub fps: f64,
+    /// σ (frames) of the leader frame the follower is expressed in
+    /// (`dancegen_motion::repr::duet::leader_frames`; 0 = each frame's own heading). Must be
+    /// the value the model was trained with (`[data] heading_sigma`).
+    #[serde(default)]
+    pub heading_sigma: f64,
     pub autoencoder: HfsqAutoencoderConfig,
     pub denoiser: DenoiserConfig,
     #[serde(default)]

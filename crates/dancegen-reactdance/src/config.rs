@@ -197,6 +197,8 @@ pub struct SamplingDefaults {
     pub steps: usize,
     /// LDCFG `s_r` per level (`w_r = 1 + s_r`); missing levels use the last value.
     pub guidance: Vec<f64>,
+    /// DDIM stochasticity (EDGE: 1; 0 = deterministic DDIM).
+    pub eta: f64,
 }
 
 impl Default for SamplingDefaults {
@@ -204,6 +206,7 @@ impl Default for SamplingDefaults {
         Self {
             steps: 20,
             guidance: vec![1.5, 0.5],
+            eta: 1.0,
         }
     }
 }

@@ -72,7 +72,8 @@ pub fn generate_follower(
         p[1] -= floor;
     }
     let leader = &grounded;
-    let mut lead = DuetLeader::encode(leader).map_err(|e| e.to_string())?;
+    let sigma = model.config.heading_sigma;
+    let mut lead = DuetLeader::encode(leader, sigma).map_err(|e| e.to_string())?;
     let (lm, ls) = (
         &model.norm.mean[DuetFollower::DIMS..],
         &model.norm.std[DuetFollower::DIMS..],
@@ -116,7 +117,7 @@ pub fn generate_follower(
             *v = (f64::from(*v) * fs[j] + fm[j]) as f32;
         }
     }
-    let mut follower = DuetFollower::decode(&data, leader).map_err(|e| e.to_string())?;
+    let mut follower = DuetFollower::decode(&data, leader, sigma).map_err(|e| e.to_string())?;
     for p in follower.trans.chunks_exact_mut(3) {
         p[1] += floor;
     }

@@ -41,6 +41,7 @@ fn model() -> DuetModel {
             kind: KIND.into(),
             name: "test".into(),
             fps: 30.0,
+            heading_sigma: 20.0,
             autoencoder,
             denoiser,
             sampling: SamplingDefaults::default(),

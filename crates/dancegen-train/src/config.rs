@@ -157,6 +157,10 @@ pub struct DataConfig {
     /// "duet"`.
     #[serde(default)]
     pub leader: Option<PathBuf>,
+    /// Duet data: Gaussian σ (frames) of the leader frame's heading
+    /// (`dancegen_motion::repr::duet::leader_frames`); 0 = each frame's own heading.
+    #[serde(default)]
+    pub heading_sigma: f64,
 }
 
 fn default_fps() -> f32 {

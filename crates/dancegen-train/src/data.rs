@@ -191,7 +191,7 @@ fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
 }
 
 /// Duet frames `[follower 151 | leader 220]` of a follower and its leader (cut to the shorter).
-fn encode_duet(follower: &SmplMotion, leader: &SmplMotion) -> Result<Vec<f32>, String> {
+fn encode_duet(follower: &SmplMotion, leader: &SmplMotion, sigma: f64) -> Result<Vec<f32>, String> {
     let t = follower.frames().min(leader.frames());
     let cut = |m: &SmplMotion| SmplMotion {
         fps: m.fps,
@@ -199,8 +199,8 @@ fn encode_duet(follower: &SmplMotion, leader: &SmplMotion) -> Result<Vec<f32>, S
         trans: m.trans[..t * 3].to_vec(),
     };
     let (f, l) = (cut(follower), cut(leader));
-    let fe = DuetFollower::encode(&f, &l).map_err(|e| e.to_string())?;
-    let le = DuetLeader::encode(&l).map_err(|e| e.to_string())?;
+    let fe = DuetFollower::encode(&f, &l, sigma).map_err(|e| e.to_string())?;
+    let le = DuetLeader::encode(&l, sigma).map_err(|e| e.to_string())?;
     let mut out = Vec::with_capacity(t * (DuetFollower::DIMS + DuetLeader::DIMS));
     for (a, b) in fe
         .chunks_exact(DuetFollower::DIMS)
@@ -296,7 +296,7 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
     let mut clips = Vec::new();
     for m in &dancers {
         let mut motion = match &leader {
-            Some(l) => encode_duet(m, l),
+            Some(l) => encode_duet(m, l, c.heading_sigma),
             None => encode(c.representation, m),
         }
         .map_err(data_err)?;

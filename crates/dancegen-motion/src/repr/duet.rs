@@ -13,23 +13,31 @@
 //! | 0..90 | upper | 6D (first two rows, as pytorch3d) of the local rotations of [`UPPER_JOINTS`] |
 //! | 90..138 | lower | 6D of the local rotations of [`LOWER_JOINTS`] |
 //! | 138..142 | lower | foot contacts of the follower (EDGE's rule: 1 where the joint moves < 1 cm in the next frame), SMPL joints 7, 8, 10, 11 |
-//! | 142..145 | root | follower pelvis `(x, z)` minus the leader's, turned into the leader's heading frame; follower pelvis height `y` (world) |
-//! | 145..151 | root | 6D of the follower's root orientation in the leader's heading frame |
+//! | 142..145 | root | follower pelvis `(x, z)` minus the leader's, turned into the leader frame; follower pelvis height `y` (world) |
+//! | 145..151 | root | 6D of the follower's root orientation in the leader frame |
 //!
-//! The heading frame of a pelvis rotation `R` is the rotation about +Y by
-//! `atan2(f_x, f_z)` with `f = R·(0, 0, 1)` (SMPL faces +Z): decoding puts the follower back in
-//! the leader's world frame exactly, so the pair stays a couple whatever the leader does.
+//! The **leader frame** of a frame is the rotation about +Y by the leader's heading
+//! (`atan2(f_x, f_z)` with `f = R·(0, 0, 1)` for the pelvis rotation `R`; SMPL faces +Z),
+//! unwrapped over the sequence and smoothed by a Gaussian of `sigma` frames ([`leader_frames`];
+//! `sigma = 0`: the heading of each frame). Decoding uses the same frames, so the follower comes
+//! back into the leader's world frame exactly and the pair stays a couple whatever the leader
+//! does. Why smooth: a salsa leader turns at ~4 rad/s on average; in a frame that turns with the
+//! leader every centimetre of error in the follower's relative position becomes world motion at
+//! that rate (the first model, `sigma = 0`, moved its followers' pelvis at 2–4 m/s where real
+//! followers move at 0.8–1.3 m/s). The smoothed frame keeps the representation independent of
+//! where the couple stands and which way it faces, while spins stay in the features.
 //!
-//! Leader, [`DuetLeader::DIMS`] = 220 per frame, translation- and heading-invariant:
+//! Leader, [`DuetLeader::DIMS`] = 220 per frame, translation- and heading-invariant (in the
+//! leader frame, which its own instantaneous heading deviates from):
 //!
 //! | dims | content |
 //! |---|---|
 //! | 0 | pelvis height `y` |
-//! | 1..3 | pelvis velocity `(x, z)` in its own heading frame, m/s (forward difference, last frame repeated) |
-//! | 3 | heading rate, rad/s (wrapped) |
-//! | 4..10 | 6D of the pelvis orientation in its own heading frame (tilt) |
+//! | 1..3 | pelvis velocity `(x, z)` in the leader frame, m/s (forward difference, last frame repeated) |
+//! | 3 | heading rate, rad/s (wrapped, unsmoothed) |
+//! | 4..10 | 6D of the pelvis orientation in the leader frame |
 //! | 10..148 | 6D of the local rotations of joints 1..23 |
-//! | 148..220 | the 24 joints' world positions minus the pelvis, in its heading frame |
+//! | 148..220 | the 24 joints' world positions minus the pelvis, in the leader frame |
 
 use std::ops::Range;
 
@@ -73,6 +81,33 @@ pub fn heading(root: &Mat3) -> f64 {
     f[0].atan2(f[2])
 }
 
+/// The leader frame's yaw angle of every frame: headings unwrapped, then a Gaussian of `sigma`
+/// frames (ends held; `sigma ≤ 0` leaves them as they are).
+pub fn leader_frames(leader: &SmplMotion, sigma: f64) -> Vec<f64> {
+    let t = leader.frames();
+    let mut h: Vec<f64> = (0..t).map(|f| heading(&rot(leader, f, 0))).collect();
+    for f in 1..t {
+        h[f] = h[f - 1] + wrap_angle(h[f] - h[f - 1]);
+    }
+    if sigma <= 0.0 || t < 2 {
+        return h;
+    }
+    let r = (4.0 * sigma).ceil() as isize;
+    let w: Vec<f64> = (-r..=r)
+        .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
+        .collect();
+    let norm: f64 = w.iter().sum();
+    (0..t as isize)
+        .map(|f| {
+            (-r..=r)
+                .zip(&w)
+                .map(|(k, wk)| wk * h[(f + k).clamp(0, t as isize - 1) as usize])
+                .sum::<f64>()
+                / norm
+        })
+        .collect()
+}
+
 fn yaw(angle: f64) -> Mat3 {
     Mat3::from_axis_rotation(1, angle)
 }
@@ -104,9 +139,15 @@ fn check_pair(follower: &SmplMotion, leader: &SmplMotion) -> Result<usize, ReprE
 }
 
 impl DuetFollower {
-    /// `(T, 151)` of `follower` relative to `leader` (both 30 fps, same length).
-    pub fn encode(follower: &SmplMotion, leader: &SmplMotion) -> Result<Vec<f32>, ReprError> {
+    /// `(T, 151)` of `follower` relative to `leader` (both 30 fps, same length) in leader frames
+    /// smoothed by `sigma` frames.
+    pub fn encode(
+        follower: &SmplMotion,
+        leader: &SmplMotion,
+        sigma: f64,
+    ) -> Result<Vec<f32>, ReprError> {
         let t = check_pair(follower, leader)?;
+        let frames = leader_frames(leader, sigma);
         let contacts = contacts_velocity(&follower.joints_world()?, EDGE_CONTACT_VELOCITY);
         let mut out = Vec::with_capacity(t * Self::DIMS);
         for f in 0..t {
@@ -114,7 +155,7 @@ impl DuetFollower {
                 push6(&mut out, &rot(follower, f, j));
             }
             out.extend_from_slice(&contacts[f * 4..f * 4 + 4]);
-            let inv = yaw(heading(&rot(leader, f, 0))).transpose();
+            let inv = yaw(frames[f]).transpose();
             let (pf, pl) = (pelvis(follower, f), pelvis(leader, f));
             let rel = inv.mul_vec([pf[0] - pl[0], 0.0, pf[2] - pl[2]]);
             out.extend([rel[0], pf[1], rel[2]].map(|v| v as f32));
@@ -123,8 +164,9 @@ impl DuetFollower {
         Ok(out)
     }
 
-    /// The follower back in `leader`'s world frame from `(T, 151)` (contacts are ignored).
-    pub fn decode(data: &[f32], leader: &SmplMotion) -> Result<SmplMotion, ReprError> {
+    /// The follower back in `leader`'s world frame from `(T, 151)` (contacts are ignored);
+    /// `sigma` as in [`Self::encode`].
+    pub fn decode(data: &[f32], leader: &SmplMotion, sigma: f64) -> Result<SmplMotion, ReprError> {
         let t = frames_of("DuetFollower::decode", data, Self::DIMS)?;
         let tl = leader.validate()?;
         if t != tl {
@@ -132,6 +174,7 @@ impl DuetFollower {
                 "{t} follower frames for a {tl}-frame leader"
             )));
         }
+        let frames = leader_frames(leader, sigma);
         let mut poses = vec![0f32; t * POSE_DIMS];
         let mut trans = Vec::with_capacity(t * 3);
         for (f, row) in data.chunks_exact(Self::DIMS).enumerate() {
@@ -144,7 +187,7 @@ impl DuetFollower {
                 poses[f * POSE_DIMS + 3 * j..f * POSE_DIMS + 3 * j + 3]
                     .copy_from_slice(&aa.map(|v| v as f32));
             }
-            let h = yaw(heading(&rot(leader, f, 0)));
+            let h = yaw(frames[f]);
             let r = &row[Self::ROOT_POS];
             let off = h.mul_vec([f64::from(r[0]), 0.0, f64::from(r[2])]);
             let pl = pelvis(leader, f);
@@ -157,19 +200,21 @@ impl DuetFollower {
 }
 
 impl DuetLeader {
-    /// `(T, 220)` conditioning features of a 30-fps leader.
-    pub fn encode(leader: &SmplMotion) -> Result<Vec<f32>, ReprError> {
+    /// `(T, 220)` conditioning features of a 30-fps leader in leader frames smoothed by `sigma`
+    /// frames.
+    pub fn encode(leader: &SmplMotion, sigma: f64) -> Result<Vec<f32>, ReprError> {
         check_fps("DuetLeader::encode", leader.fps, CANONICAL_FPS as f32)?;
         let t = leader.validate()?;
         let joints = leader.joints_world()?;
         let fps = f64::from(leader.fps);
         let headings: Vec<f64> = (0..t).map(|f| heading(&rot(leader, f, 0))).collect();
+        let frames = leader_frames(leader, sigma);
         let mut out = Vec::with_capacity(t * Self::DIMS);
         for f in 0..t {
             let n = if f + 1 < t { f + 1 } else { f };
             let p = if n == f && f > 0 { f - 1 } else { f };
             let (a, b) = if n == f { (p, f) } else { (f, n) };
-            let inv = yaw(headings[f]).transpose();
+            let inv = yaw(frames[f]).transpose();
             let (pa, pb) = (pelvis(leader, a), pelvis(leader, b));
             let v = inv.mul_vec([(pb[0] - pa[0]) * fps, 0.0, (pb[2] - pa[2]) * fps]);
             let dyaw = wrap_angle(headings[b] - headings[a]) * fps;
@@ -216,19 +261,21 @@ mod tests {
     fn follower_round_trips_in_the_leaders_world_frame() {
         let leader = dancer(40, 0.0, 0.0);
         let follower = dancer(40, 1.0, 0.8);
-        let enc = DuetFollower::encode(&follower, &leader).unwrap();
-        assert_eq!(enc.len(), 40 * DuetFollower::DIMS);
-        let dec = DuetFollower::decode(&enc, &leader).unwrap();
-        let (a, b) = (
-            follower.joints_world().unwrap(),
-            dec.joints_world().unwrap(),
-        );
-        let worst = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0f32, f32::max);
-        assert!(worst < 1e-4, "joints differ by {worst} m");
+        for sigma in [0.0, 10.0] {
+            let enc = DuetFollower::encode(&follower, &leader, sigma).unwrap();
+            assert_eq!(enc.len(), 40 * DuetFollower::DIMS);
+            let dec = DuetFollower::decode(&enc, &leader, sigma).unwrap();
+            let (a, b) = (
+                follower.joints_world().unwrap(),
+                dec.joints_world().unwrap(),
+            );
+            let worst = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0f32, f32::max);
+            assert!(worst < 1e-4, "sigma {sigma}: joints differ by {worst} m");
+        }
     }
 
     #[test]
@@ -243,16 +290,16 @@ mod tests {
             }
             m
         };
-        let a = DuetFollower::encode(&follower, &leader).unwrap();
-        let b = DuetFollower::encode(&moved(&follower), &moved(&leader)).unwrap();
+        let a = DuetFollower::encode(&follower, &leader, 5.0).unwrap();
+        let b = DuetFollower::encode(&moved(&follower), &moved(&leader), 5.0).unwrap();
         let worst = a
             .iter()
             .zip(&b)
             .map(|(x, y)| (x - y).abs())
             .fold(0f32, f32::max);
         assert!(worst < 1e-4);
-        let la = DuetLeader::encode(&leader).unwrap();
-        let lb = DuetLeader::encode(&moved(&leader)).unwrap();
+        let la = DuetLeader::encode(&leader, 5.0).unwrap();
+        let lb = DuetLeader::encode(&moved(&leader), 5.0).unwrap();
         assert_eq!(la.len(), 20 * DuetLeader::DIMS);
         let worst = la
             .iter()
@@ -263,8 +310,29 @@ mod tests {
     }
 
     #[test]
+    fn smoothed_leader_frames_follow_the_turn_without_the_wobble() {
+        let mut leader = dancer(200, 0.0, 0.0);
+        // Heading: a steady turn of 0.02 rad/frame plus a ±0.5 rad wobble every 8 frames.
+        for f in 0..200 {
+            let h = 0.02 * f as f32 + 0.5 * (f as f32 * std::f32::consts::TAU / 8.0).sin();
+            leader.poses[f * POSE_DIMS..f * POSE_DIMS + 3].copy_from_slice(&[0.0, h, 0.0]);
+        }
+        let raw = leader_frames(&leader, 0.0);
+        let smooth = leader_frames(&leader, 30.0);
+        for f in 60..140 {
+            assert!((raw[f] - 0.02 * f as f64).abs() <= 0.5 + 1e-6);
+            assert!(
+                (smooth[f] - 0.02 * f as f64).abs() < 0.02,
+                "frame {f}: {}",
+                smooth[f]
+            );
+        }
+    }
+
+    #[test]
     fn couples_of_different_lengths_are_an_error() {
-        let e = DuetFollower::encode(&dancer(20, 0.0, 0.0), &dancer(21, 0.0, 0.0)).unwrap_err();
+        let e =
+            DuetFollower::encode(&dancer(20, 0.0, 0.0), &dancer(21, 0.0, 0.0), 0.0).unwrap_err();
         assert!(e.to_string().contains("same length"), "{e}");
     }
 }

@@ -288,10 +288,12 @@ pub fn assemble_duet_bundle(
     let dst = out.join(bundle_files::NORMALIZER);
     dancegen_io::write_atomic(&dst, |w| w.write_all(&bytes))
         .map_err(|e| crate::TrainError::io(&dst, e))?;
+    let run = crate::trainer::run_config(ldm_run)?;
     let config = BundleConfig {
         kind: KIND.into(),
         name: name.into(),
         fps: 30.0,
+        heading_sigma: run.data.heading_sigma,
         autoencoder: ae_cfg,
         denoiser: table.denoiser,
         sampling: SamplingDefaults::default(),
