@@ -63,7 +63,7 @@ OUT=$(realpath "$OUT")
 HELP="$PYTHON $ROOT/tools/duet_eval.py"
 T0=$(date +%s)
 # Other CPU users at the start (reported: timings depend on them).
-LOAD_NOTE="$(pgrep -c -f 'dancegen train' || true) \`dancegen train\` processes running at the start, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+LOAD_NOTE="$(pgrep -c -f 'dancegen[^ ]* train ' || true) \`dancegen train\` processes running at the start, load average $(cut -d' ' -f1-3 /proc/loadavg)"
 log() { echo "[duet-eval $(date -u +%H:%M:%S)] $*" >&2; }
 for c in $CONFIGS; do
     case " $ALL_CONFIGS " in *" $c "*) ;; *) echo "unknown configuration $c (known: $ALL_CONFIGS)" >&2; exit 2 ;; esac
