@@ -18,7 +18,10 @@ fn smpl(path: &str) -> SmplMotion {
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
-    assert!(a.len() >= 5, "usage: MODEL_DIR FOLLOWER LEADER OUT.npy [LEVELS]");
+    assert!(
+        a.len() >= 5,
+        "usage: MODEL_DIR FOLLOWER LEADER OUT.npy [LEVELS]"
+    );
     let dev = device::inference();
     let model = DuetModel::load(std::path::Path::new(&a[1]), &dev).expect("model");
     let (f, l) = (smpl(&a[2]), smpl(&a[3]));
@@ -45,7 +48,11 @@ fn main() {
         .unwrap_or(model.config.autoencoder.num_levels);
     let z = model.autoencoder.encode(x);
     let y = model.autoencoder.decode_levels(z, levels);
-    let mut y = y.into_data().convert::<f32>().try_into_vec::<f32>().unwrap();
+    let mut y = y
+        .into_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .unwrap();
     for row in y.chunks_exact_mut(d) {
         for (j, v) in row.iter_mut().enumerate() {
             *v = (f64::from(*v) * std[j] + mean[j]) as f32;

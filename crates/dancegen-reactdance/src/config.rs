@@ -205,7 +205,11 @@ impl Default for SamplingDefaults {
     fn default() -> Self {
         Self {
             steps: 20,
-            guidance: vec![1.5, 0.5],
+            // Chosen on two training couples (60_05, 61_02; seed 0): the coarse scale sets how
+            // close the follower dances. s_coarse 1.5 / 2 / 2.5 gave 25.6 / 20.4 / 15.9 %
+            // interpenetration and 75 / 71 / 66 % contact range against the real followers'
+            // 18.2 % and 75 %; higher scales also add jerk.
+            guidance: vec![2.0, 0.5],
             eta: 1.0,
         }
     }
