@@ -210,11 +210,11 @@ impl DuetLeader {
         let headings: Vec<f64> = (0..t).map(|f| heading(&rot(leader, f, 0))).collect();
         let frames = leader_frames(leader, sigma);
         let mut out = Vec::with_capacity(t * Self::DIMS);
-        for f in 0..t {
+        for (f, &frame) in frames.iter().enumerate() {
             let n = if f + 1 < t { f + 1 } else { f };
             let p = if n == f && f > 0 { f - 1 } else { f };
             let (a, b) = if n == f { (p, f) } else { (f, n) };
-            let inv = yaw(frames[f]).transpose();
+            let inv = yaw(frame).transpose();
             let (pa, pb) = (pelvis(leader, a), pelvis(leader, b));
             let v = inv.mul_vec([(pb[0] - pa[0]) * fps, 0.0, (pb[2] - pa[2]) * fps]);
             let dyaw = wrap_angle(headings[b] - headings[a]) * fps;
