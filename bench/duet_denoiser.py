@@ -79,7 +79,7 @@ AE = _table("reactdance_small_hfsq.toml", "autoencoder",
 DEN = _table("reactdance_small_ldm.toml", "denoiser",
              {"d_model": 192, "n_layers": 4, "n_heads": 6, "d_ff": 384, "leader_layers": 1,
               "block_tokens": 60, "causal": False, "timesteps": 1000})
-STEPS, GUIDANCE, ETA = 20, [1.5, 0.5], 1.0
+STEPS, GUIDANCE, ETA = 10, [2.0, 0.5], 1.0
 DILATION_GROWTH = 3  # ConvCodecConfig default (the autoencoder does not override it)
 
 F_TOKEN = 2 ** AE["down_t"]

@@ -204,7 +204,10 @@ pub struct SamplingDefaults {
 impl Default for SamplingDefaults {
     fn default() -> Self {
         Self {
-            steps: 20,
+            // 10 DDIM steps keep a 2000-frame follower under 2 s end to end on 2 cores; on the
+            // held-out couples 10 and 20 steps measured alike (docs/duet-eval.md, FID_k 378 vs
+            // 386, IPR 31.8 vs 30.8 %).
+            steps: 10,
             // Chosen on two training couples (60_05, 61_02; seed 0): the coarse scale sets how
             // close the follower dances. s_coarse 1.5 / 2 / 2.5 gave 25.6 / 20.4 / 15.9 %
             // interpenetration and 75 / 71 / 66 % contact range against the real followers'
