@@ -138,6 +138,43 @@ pub fn gelu_tensor<const D: usize>(x: Tensor<D>) -> Option<Tensor<D>> {
     Some(Tensor::from_data(TensorData::new(data, shape), &device))
 }
 
+/// Mish, `x·tanh(softplus(x))`, written with one exp: `tanh(ln(1 + e)) = n / (n + 2)` for
+/// `n = e (e + 2)`, `e = eˣ`; `x` itself above 20, where that ratio is 1 in f32. Branch-free, so
+/// the loop over a slice vectorises (libm's `log1pf`, `expm1f` and `tanhf`, which Burn's mish
+/// calls per element, were a quarter of the duet sampler's time).
+#[inline(always)]
+pub fn mish(x: f32) -> f32 {
+    let e = exp(x.min(20.0));
+    let n = e * (e + 2.0);
+    let r = x * n / (n + 2.0);
+    if x > 20.0 { x } else { r }
+}
+
+widest!(
+    /// Mish of every element, in place.
+    fn mish_slice(xs: &mut [f32]) => mish_slice_portable
+);
+
+#[inline(always)]
+fn mish_slice_portable(xs: &mut [f32]) {
+    for v in xs {
+        *v = mish(*v);
+    }
+}
+
+/// Mish of an `f32` tensor without autodiff, on the host; `None` for other tensors (the caller
+/// then uses Burn's op).
+pub fn mish_tensor<const D: usize>(x: Tensor<D>) -> Option<Tensor<D>> {
+    if x.is_autodiff() || x.dtype() != DType::F32 || x.device() != Device::flex() {
+        return None;
+    }
+    let device = x.device();
+    let shape = x.shape();
+    let mut data: Vec<f32> = x.into_data().try_into_vec().ok()?;
+    data.par_chunks_mut(CHUNK).for_each(mish_slice);
+    Some(Tensor::from_data(TensorData::new(data, shape), &device))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,6 +199,27 @@ mod tests {
         assert!(exp(f32::NAN).is_nan());
         assert_eq!(exp(0.0), 1.0);
         assert!((f64::from(exp(-87.3)) / f64::from(-87.3f32).exp() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn mish_matches_burns_mish() {
+        let xs: Vec<f32> = (0..60_001).map(|i| -30.0 + i as f32 * 1e-3).collect();
+        let dev = Device::flex();
+        let t = Tensor::<1>::from_data(TensorData::new(xs.clone(), [xs.len()]), &dev);
+        let want: Vec<f32> = burn::tensor::activation::mish(t.clone())
+            .into_data()
+            .try_into_vec()
+            .unwrap();
+        let got: Vec<f32> = mish_tensor(t).unwrap().into_data().try_into_vec().unwrap();
+        for ((x, g), w) in xs.iter().zip(&got).zip(&want) {
+            // A few f32 roundings of exp (≤ 2.5e-7 relative) and the ratio, times |x|.
+            let tol = 1e-6 * (1.0 + x.abs());
+            assert!((g - w).abs() <= tol, "mish({x}) = {g}, Burn {w}");
+        }
+        assert!(mish(f32::NAN).is_nan());
+        assert_eq!(mish(f32::INFINITY), f32::INFINITY);
+        assert_eq!(mish(1e30), 1e30);
+        assert!(mish(-1e3).abs() < 1e-30);
     }
 
     #[test]
