@@ -22,7 +22,7 @@ use crate::manifest::{ClipEntry, WarpReport};
 use crate::warp::warp_motion;
 use crate::{
     BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs, bas_bailando,
-    check_hold_out, create_dirs, expand_motion_inputs, genre, load_units, plan_song, stem,
+    best_song, check_hold_out, create_dirs, expand_motion_inputs, genre, load_units, stem,
     world_joints, write_couple_clip,
 };
 
@@ -190,18 +190,8 @@ fn pair_couple(
     let ma = slice(&a.motion, 0..frames);
     let mb = slice(&b.motion, 0..frames);
     let joints = world_joints(&ma, &a.source)?;
-    let minutes = frames as f64 / f64::from(crate::FPS) / 60.0;
-    let n = candidates.len();
-    let mut best: Option<(f64, usize, Vec<crate::PiecePlan>)> = None;
-    for k in 0..n {
-        let si = candidates[(k + opts.seed as usize % n) % n];
-        let plan = plan_song(&joints, frames, &songs[si], &opts.warp);
-        let score = plan.iter().map(|p| p.matched.pairs.len()).sum::<usize>() as f64 / minutes;
-        if best.as_ref().is_none_or(|(s, _, _)| score > *s) {
-            best = Some((score, si, plan));
-        }
-    }
-    let (_, si, plan) = best.expect("at least one candidate song");
+    let (si, plan) = best_song(&joints, frames, songs, candidates, opts, &c.key)
+        .ok_or_else(|| DatasetError::Options(format!("couple {}: no song to pair with", c.key)))?;
     let song = &songs[si];
     let pieces = plan.len();
     let mut out = Vec::new();

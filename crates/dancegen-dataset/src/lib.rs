@@ -646,6 +646,32 @@ pub(crate) fn plan_song(
         .collect()
 }
 
+/// The candidate song with the most matched beats per minute of motion, and its plan; exact ties
+/// go to the first song in an order rotated by the seed. `None` without candidates.
+pub(crate) fn best_song(
+    joints: &[f64],
+    frames: usize,
+    songs: &[Song],
+    candidates: &[usize],
+    opts: &BuildOptions,
+    name: &str,
+) -> Option<(usize, Vec<PiecePlan>)> {
+    let minutes = frames as f64 / f64::from(FPS) / 60.0;
+    let n = candidates.len();
+    let mut best: Option<(f64, usize, Vec<PiecePlan>)> = None;
+    for k in 0..n {
+        let si = candidates[(k + opts.seed as usize % n) % n];
+        let plan = plan_song(joints, frames, &songs[si], &opts.warp);
+        let matched: usize = plan.iter().map(|p| p.matched.pairs.len()).sum();
+        let score = matched as f64 / minutes;
+        tracing::debug!("{name} x {}: {score:.1} matched beats/min", songs[si].name);
+        if best.as_ref().is_none_or(|(b, _, _)| score > *b) {
+            best = Some((score, si, plan));
+        }
+    }
+    best.map(|(_, si, plan)| (si, plan))
+}
+
 /// Picks the song and produces the warped clips of one dancer.
 fn pair_unit(
     unit: &MotionUnit,
@@ -664,26 +690,7 @@ fn pair_unit(
         return Ok(Vec::new());
     }
     let joints = world_joints(m, &unit.source)?;
-    let minutes = frames as f64 / f64::from(FPS) / 60.0;
-    // Most matched beats per minute of motion; exact ties go to the first song in an order
-    // rotated by the seed.
-    let n = candidates.len();
-    let mut best: Option<(f64, usize, Vec<PiecePlan>)> = None;
-    for k in 0..n {
-        let si = candidates[(k + opts.seed as usize % n.max(1)) % n];
-        let plan = plan_song(&joints, frames, &songs[si], &opts.warp);
-        let matched: usize = plan.iter().map(|p| p.matched.pairs.len()).sum();
-        let score = matched as f64 / minutes;
-        tracing::debug!(
-            "{} x {}: {score:.1} matched beats/min",
-            unit.name,
-            songs[si].name
-        );
-        if best.as_ref().is_none_or(|(b, _, _)| score > *b) {
-            best = Some((score, si, plan));
-        }
-    }
-    let Some((_, si, plan)) = best else {
+    let Some((si, plan)) = best_song(&joints, frames, songs, candidates, opts, &unit.name) else {
         return Err(DatasetError::Options(format!(
             "{}: no song to pair with",
             unit.source.display()
