@@ -100,18 +100,7 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     let genre = model.genre_index(&genre_name).map_err(anyhow::Error::msg)?;
     pb.finish_and_clear();
 
-    let source = song_or_demo(args.song.as_ref());
-    let label = source.label().display().to_string();
-    let pb = spinner(&format!("analysing {label}"), quiet);
-    let feats = extract(
-        &source,
-        &ExtractOptions {
-            fps: FPS,
-            set: FeatureSet::Edge35,
-            start_bpm: None,
-        },
-    )?;
-    pb.finish_and_clear();
+    let (source, label, feats) = analyse_song(args.song.as_ref(), quiet)?;
     let total = feats.features.rows;
     // librosa-style framing has a frame at both ends (1 + samples / hop rows): a song of
     // d seconds has d · 30 frame intervals, and the dance gets that many frames.
@@ -222,6 +211,27 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
 
 fn dancegen_nn_device() -> dancegen_lodgepp::Device {
     dancegen_lodgepp::inference_device()
+}
+
+/// The song (or the bundled demo), its label and its EDGE-35 features at 30 fps over the whole
+/// song (both generators slice what they dance to from them).
+pub(crate) fn analyse_song(
+    song: Option<&PathBuf>,
+    quiet: bool,
+) -> Result<(AudioSource, String, dancegen_music::features::MusicFeatures)> {
+    let source = song_or_demo(song);
+    let label = source.label().display().to_string();
+    let pb = spinner(&format!("analysing {label}"), quiet);
+    let feats = extract(
+        &source,
+        &ExtractOptions {
+            fps: FPS,
+            set: FeatureSet::Edge35,
+            start_bpm: None,
+        },
+    )?;
+    pb.finish_and_clear();
+    Ok((source, label, feats))
 }
 
 /// Raw EDGE-151 frames → SMPL motion standing on the floor: the supporting foot at y = 0 and

@@ -16,14 +16,12 @@ use dancegen_motion::formats::{
     ConvertOptions, LoadedMotion, convert_motion, load_motion_file, save_motion_file,
 };
 use dancegen_motion::repr::SmplMotion;
-use dancegen_music::features::{ExtractOptions, FeatureSet, extract};
 use dancegen_reactdance::blc::{LatentSampling, LongForm};
 use dancegen_reactdance::bundle::DuetModel;
 use dancegen_reactdance::pipeline::generate_follower;
 
 use crate::cli::{GenerateArgs, SamplerArg};
-use crate::cmd_generate::{FPS, Out, kind_of, preview_motion, song_segment_wav};
-use crate::demo::song_or_demo;
+use crate::cmd_generate::{FPS, Out, analyse_song, kind_of, preview_motion, song_segment_wav};
 use crate::progress::spinner;
 
 /// The duet model shipped in the repository (`models/reactdance-small`).
@@ -145,18 +143,7 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     let levels = model.config.autoencoder.num_levels;
     let guidance = level_scales(args, &model.config.sampling.guidance, levels)?;
 
-    let source = song_or_demo(args.song.as_ref());
-    let label = source.label().display().to_string();
-    let pb = spinner(&format!("analysing {label}"), quiet);
-    let feats = extract(
-        &source,
-        &ExtractOptions {
-            fps: FPS,
-            set: FeatureSet::Edge35,
-            start_bpm: None,
-        },
-    )?;
-    pb.finish_and_clear();
+    let (source, label, feats) = analyse_song(args.song.as_ref(), quiet)?;
     let total = feats.features.rows;
     let start = args.start.unwrap_or(0.0);
     if !(start.is_finite() && start >= 0.0) {
