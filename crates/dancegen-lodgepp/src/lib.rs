@@ -37,7 +37,6 @@ pub mod planted_feet;
 pub mod primitives;
 pub mod sampler;
 pub mod seams;
-pub mod smoothing;
 pub mod training;
 
 pub use dancegen_nn::burn::tensor::Device;

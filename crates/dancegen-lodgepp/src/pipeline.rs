@@ -28,7 +28,7 @@ use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
-use crate::smoothing::{Ends, gaussian_smooth};
+use dancegen_motion::smoothing::{Ends, gaussian_smooth};
 
 /// Which long-form sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

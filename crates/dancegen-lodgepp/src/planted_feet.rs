@@ -17,7 +17,7 @@ use dancegen_nn::loss::FkSkeleton;
 use crate::foot_refine::CONTACT_HEIGHT;
 use crate::kinematics::{host_skeleton, joints_host};
 use crate::layout::{CONTACTS, DIMS, FEET, ROOT_HORIZONTAL, ROT6D_START};
-use crate::smoothing::{Ends, gaussian_smooth};
+use dancegen_motion::smoothing::{Ends, gaussian_smooth};
 
 /// Frames over which the IK fades in before and out after a contact (0.13 s at 30 fps: a
 /// foot lands and lifts within about that).

@@ -212,14 +212,26 @@ pub fn point_segment_distance_sq(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
     dot(d, d)
 }
 
-/// Squared distance between segments `p1–q1` and `p2–q2` (the closest-points construction of
-/// Ericson, *Real-Time Collision Detection*, §5.1.9; degenerate segments are points).
+/// Squared distance between segments `p1–q1` and `p2–q2` (degenerate segments are points).
 pub fn segment_distance_sq(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) -> f64 {
+    let (c1, c2) = segment_closest_points(p1, q1, p2, q2);
+    let d = sub(c1, c2);
+    dot(d, d)
+}
+
+/// The closest points `(on p1–q1, on p2–q2)` of two segments (the construction of Ericson,
+/// *Real-Time Collision Detection*, §5.1.9; degenerate segments are points).
+pub fn segment_closest_points(
+    p1: [f64; 3],
+    q1: [f64; 3],
+    p2: [f64; 3],
+    q2: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
     const EPS: f64 = 1e-12;
     let (d1, d2, r) = (sub(q1, p1), sub(q2, p2), sub(p1, p2));
     let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
     if a <= EPS && e <= EPS {
-        return dot(r, r);
+        return (p1, p2);
     }
     let (s, t);
     if a <= EPS {
@@ -250,8 +262,7 @@ pub fn segment_distance_sq(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3
             t = t0;
         }
     }
-    let d = sub(lerp(p1, q1, s), lerp(p2, q2, t));
-    dot(d, d)
+    (lerp(p1, q1, s), lerp(p2, q2, t))
 }
 
 /// Signed distance (metres) from `point` to the surface of `capsule` posed by one frame's 24

@@ -19,6 +19,7 @@ pub mod repr;
 pub mod retarget;
 pub mod rotation;
 pub mod skeleton;
+pub mod smoothing;
 pub mod smpl_npz;
 pub mod vec3;
 

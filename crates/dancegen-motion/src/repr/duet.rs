@@ -45,6 +45,7 @@ use super::motion::{EDGE_CONTACT_VELOCITY, POSE_DIMS, SMPL_JOINTS, contacts_velo
 use super::{ReprError, SmplMotion, check_fps, frames_of};
 use crate::conventions::CANONICAL_FPS;
 use crate::rotation::{Mat3, wrap_angle};
+use crate::smoothing::{Ends, gaussian_smooth_truncated};
 
 /// Spine, neck, head, collars, shoulders, elbows, wrists, hands (SMPL 24 indices).
 pub const UPPER_JOINTS: [usize; 15] = [3, 6, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23];
@@ -89,23 +90,8 @@ pub fn leader_frames(leader: &SmplMotion, sigma: f64) -> Vec<f64> {
     for f in 1..t {
         h[f] = h[f - 1] + wrap_angle(h[f] - h[f - 1]);
     }
-    if sigma <= 0.0 || t < 2 {
-        return h;
-    }
-    let r = (4.0 * sigma).ceil() as isize;
-    let w: Vec<f64> = (-r..=r)
-        .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
-        .collect();
-    let norm: f64 = w.iter().sum();
-    (0..t as isize)
-        .map(|f| {
-            (-r..=r)
-                .zip(&w)
-                .map(|(k, wk)| wk * h[(f + k).clamp(0, t as isize - 1) as usize])
-                .sum::<f64>()
-                / norm
-        })
-        .collect()
+    // Cut at 4σ (not the filter's default 3σ): the shipped model was trained on this frame.
+    gaussian_smooth_truncated(&h, sigma, 4.0, Ends::Hold)
 }
 
 fn yaw(angle: f64) -> Mat3 {
