@@ -75,6 +75,11 @@ pub struct GenerateArgs {
     /// Duet: write the follower alone to every output.
     #[arg(long, requires = "leader")]
     pub follower_only: bool,
+    /// Duet: keep the follower exactly where the model put it, even where its body passes
+    /// through the leader's (by default a smooth horizontal shift moves it out; hands may
+    /// touch).
+    #[arg(long, requires = "leader")]
+    pub no_separation: bool,
     /// Duet: guidance s of the coarse (base) HFSQ level, x̂0 = (1 + s)·cond − s·uncond
     /// (default: the model's).
     #[arg(long, requires = "leader")]

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use dancegen_motion::couple_separation::SeparationConfig;
 use dancegen_motion::formats::{
     ConvertOptions, LoadedMotion, convert_motion, load_motion_file, save_motion_file,
 };
@@ -182,9 +183,17 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
         quiet,
     );
     let t_gen = Instant::now();
-    let out = generate_follower(&model, &leader, music, &sampling, &device)
-        .map_err(anyhow::Error::msg)
-        .context("generating the follower")?;
+    let separation = (!args.no_separation).then(SeparationConfig::default);
+    let out = generate_follower(
+        &model,
+        &leader,
+        music,
+        &sampling,
+        separation.as_ref(),
+        &device,
+    )
+    .map_err(anyhow::Error::msg)
+    .context("generating the follower")?;
     let gen_secs = t_gen.elapsed().as_secs_f64();
     pb.finish_and_clear();
 
@@ -226,7 +235,7 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
             o,
             "{label}: follower of {} ({t} frames, {:.1} s at {FPS} fps), seed {}, {:?} sampling, \
              guidance {:?}; generated in {gen_secs:.2} s (sampling {:.2} s, decoding {:.2} s; \
-             {:.2} s in total)",
+             {:.2} s in total); {}",
             leader_path.display(),
             t as f64 / fps,
             args.seed,
@@ -234,7 +243,14 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
             guidance,
             out.sample_s,
             out.decode_s,
-            started.elapsed().as_secs_f64()
+            started.elapsed().as_secs_f64(),
+            match separation {
+                None => "no separation".to_string(),
+                Some(_) => format!(
+                    "separated from the leader by up to {:.0} mm",
+                    out.separation_max_m * 1000.0
+                ),
+            }
         )?;
         for p in &outputs {
             writeln!(o, "  -> {}", p.display())?;

@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod bvh_motion;
 pub mod capsule_body;
 pub mod conventions;
+pub mod couple_separation;
 pub mod fk;
 pub mod foot_ik;
 pub mod foot_lock;

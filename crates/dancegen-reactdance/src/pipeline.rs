@@ -5,6 +5,11 @@
 //! 2. The latent sampled by BLC (or the autoregressive ablation) with LDCFG ([`crate::blc`]).
 //! 3. The whole latent decoded at once by the HFSQ decoder, cut to the leader's length,
 //!    de-normalised, and put into the leader's world frame ([`DuetFollower::decode`]).
+//! 4. Unless turned off, the follower is moved out of the leader's body where the two
+//!    interpenetrate, by a smooth horizontal offset of its root
+//!    ([`dancegen_motion::couple_separation`]; hands may touch). Not in the paper: the model
+//!    places the follower from a learned relative position, and at partner distance its
+//!    centimetre errors put trunks through each other (docs/duet-eval.md measures both).
 //!
 //! Heights are relative to the leader's floor (its support-foot height,
 //! [`GroundMode::SupportFeet`]): the model was trained on couples standing on y = 0, and a
@@ -12,6 +17,7 @@
 
 use std::time::Instant;
 
+use dancegen_motion::couple_separation::{SeparationConfig, separation_offsets};
 use dancegen_motion::repr::motion::GroundMode;
 use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
@@ -28,6 +34,8 @@ pub struct Generated {
     /// Seconds spent sampling the latent and decoding it.
     pub sample_s: f64,
     pub decode_s: f64,
+    /// Largest horizontal offset (metres) the separation gave the follower; 0 without it.
+    pub separation_max_m: f64,
 }
 
 /// `rows` frames of `width` values padded to `frames` by repeating the last frame.
@@ -41,12 +49,14 @@ fn pad_frames(data: &[f32], width: usize, frames: usize) -> Vec<f32> {
 }
 
 /// Generates the follower of `leader` (30 fps) on `music` (`(T, 35)` EDGE features at 30 fps,
-/// at least as many frames as the leader; extra frames are ignored).
+/// at least as many frames as the leader; extra frames are ignored). `separation: None` leaves
+/// the follower where the model put it.
 pub fn generate_follower(
     model: &DuetModel,
     leader: &SmplMotion,
     music: &[f32],
     sampling: &LatentSampling,
+    separation: Option<&SeparationConfig>,
     device: &Device,
 ) -> Result<Generated, String> {
     let t = leader.frames();
@@ -118,9 +128,6 @@ pub fn generate_follower(
         }
     }
     let mut follower = DuetFollower::decode(&data, leader, sigma).map_err(|e| e.to_string())?;
-    for p in follower.trans.chunks_exact_mut(3) {
-        p[1] += floor;
-    }
     if follower
         .trans
         .iter()
@@ -129,9 +136,27 @@ pub fn generate_follower(
     {
         return Err("the model produced non-finite values".into());
     }
+    let decode_s = t1.elapsed().as_secs_f64();
+    let mut separation_max_m = 0.0f64;
+    if let Some(config) = separation {
+        let joints = |m: &SmplMotion| -> Result<Vec<f64>, String> {
+            let j = m.joints_world().map_err(|e| e.to_string())?;
+            Ok(j.into_iter().map(f64::from).collect())
+        };
+        let offsets = separation_offsets(&joints(&follower)?, &joints(leader)?, config);
+        for (p, [dx, dz]) in follower.trans.chunks_exact_mut(3).zip(offsets) {
+            p[0] += dx as f32;
+            p[2] += dz as f32;
+            separation_max_m = separation_max_m.max(dx.hypot(dz));
+        }
+    }
+    for p in follower.trans.chunks_exact_mut(3) {
+        p[1] += floor;
+    }
     Ok(Generated {
         follower,
         sample_s,
-        decode_s: t1.elapsed().as_secs_f64(),
+        decode_s,
+        separation_max_m,
     })
 }

@@ -88,7 +88,7 @@ fn follower_has_the_leaders_length_and_moves_with_it() {
         .map(|i| (i as f32 * 0.01).sin())
         .collect();
     for lf in [LongForm::Blc, LongForm::Autoregressive] {
-        let a = generate_follower(&m, &l, &music, &sampling(lf), &dev).unwrap();
+        let a = generate_follower(&m, &l, &music, &sampling(lf), None, &dev).unwrap();
         assert_eq!(a.follower.frames(), 75, "{lf:?}");
         assert!(
             a.follower
@@ -97,7 +97,7 @@ fn follower_has_the_leaders_length_and_moves_with_it() {
                 .chain(&a.follower.trans)
                 .all(|v| v.is_finite())
         );
-        let again = generate_follower(&m, &l, &music, &sampling(lf), &dev).unwrap();
+        let again = generate_follower(&m, &l, &music, &sampling(lf), None, &dev).unwrap();
         assert_eq!(
             a.follower.trans, again.follower.trans,
             "{lf:?}: same seed, same dance"
@@ -108,7 +108,7 @@ fn follower_has_the_leaders_length_and_moves_with_it() {
             p[0] += 3.0;
             p[1] += 0.5;
         }
-        let b = generate_follower(&m, &moved, &music, &sampling(lf), &dev).unwrap();
+        let b = generate_follower(&m, &moved, &music, &sampling(lf), None, &dev).unwrap();
         for (pa, pb) in a
             .follower
             .trans
@@ -136,6 +136,7 @@ fn too_little_music_is_an_error() {
         &leader(40),
         &vec![0.0; 20 * MUSIC_DIMS],
         &sampling(LongForm::Blc),
+        None,
         &device::inference(),
     )
     .err()
@@ -144,4 +145,50 @@ fn too_little_music_is_an_error() {
         e.contains("20 music frames") && e.contains("40-frame leader"),
         "{e}"
     );
+}
+
+/// Frames in which the two bodies interpenetrate (hands exempt), on world joints.
+fn penetrating_frames(a: &SmplMotion, b: &SmplMotion) -> usize {
+    use dancegen_motion::capsule_body::frame_joints;
+    use dancegen_motion::couple_separation::deepest_overlap;
+    let j = |m: &SmplMotion| -> Vec<f64> {
+        m.joints_world()
+            .unwrap()
+            .into_iter()
+            .map(f64::from)
+            .collect()
+    };
+    let (ja, jb) = (j(a), j(b));
+    (0..a.frames())
+        .filter(|&f| deepest_overlap(&frame_joints(&ja, f), &frame_joints(&jb, f), 0.0).is_some())
+        .count()
+}
+
+#[test]
+fn separation_moves_the_follower_out_of_the_leader_and_changes_nothing_else() {
+    use dancegen_motion::couple_separation::SeparationConfig;
+    let m = model();
+    let dev = device::inference();
+    let l = leader(48);
+    let music = vec![0.1f32; 48 * MUSIC_DIMS];
+    let s = sampling(LongForm::Blc);
+    let raw = generate_follower(&m, &l, &music, &s, None, &dev).unwrap();
+    // An untrained model puts the follower about where the leader is.
+    assert!(penetrating_frames(&raw.follower, &l) > 0);
+    assert_eq!(raw.separation_max_m, 0.0);
+    let sep = SeparationConfig::default();
+    let out = generate_follower(&m, &l, &music, &s, Some(&sep), &dev).unwrap();
+    assert_eq!(penetrating_frames(&out.follower, &l), 0);
+    assert_eq!(out.follower.poses, raw.follower.poses);
+    let mut largest = 0.0f64;
+    for (a, b) in raw
+        .follower
+        .trans
+        .chunks_exact(3)
+        .zip(out.follower.trans.chunks_exact(3))
+    {
+        assert_eq!(a[1], b[1], "heights are kept");
+        largest = largest.max(f64::from(b[0] - a[0]).hypot(f64::from(b[2] - a[2])));
+    }
+    assert!(largest > 0.05 && (largest - out.separation_max_m).abs() < 1e-4);
 }

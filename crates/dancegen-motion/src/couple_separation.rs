@@ -1,0 +1,289 @@
+//! Keeps two dancers from passing through each other: a smooth horizontal offset of one of them.
+//!
+//! A generator that places a dancer relative to a partner (the duet follower in its leader's
+//! frame) makes centimetre errors in that placement, and at partner-dance distances (pelvis to
+//! pelvis 0.9–1.0 m in the CMU salsa takes) they put a trunk, head or leg through the partner.
+//! [`separation_offsets`] finds a smooth track of horizontal offsets for the `mover` that takes
+//! its body out of the `fixed` dancer's, on the canonical capsule body
+//! ([`crate::capsule_body::CAPSULES`]).
+//!
+//! **Our method; ReactDance has no collision handling** (its relative-orientation and contact
+//! losses only shape training).
+//!
+//! - **Hands are exempt** ([`BodyPart::Hand`], on both dancers): partners hold hands and rest a
+//!   hand on the other's back or shoulder, so a hand capsule touching the partner is contact, not
+//!   penetration. Every other pair (trunk, head, shoulders, arms, legs, feet) counts.
+//! - Each round, the deepest overlap of every frame (two radii + [`SeparationConfig::margin_m`]
+//!   − axis distance) gives a push of that depth, horizontal, from the fixed dancer's closest
+//!   axis point towards the mover's (pelvis to pelvis where that line is vertical). The pushes
+//!   are Gaussian-smoothed (σ = `sigma_frames`, cut at 3σ, ends held) and added to the offset
+//!   track, so the correction never jumps and stays within 3σ of the frames that need it.
+//!   Smoothing lowers a peak, so rounds repeat until no capsule pair penetrates or `max_rounds`
+//!   is reached.
+//! - Only the horizontal root position changes: poses, heights (floor contact) and the fixed
+//!   dancer are kept.
+
+use crate::capsule_body::{
+    BodyPart, CAPSULES, Capsule, capsule_endpoints, frame_joints, segment_closest_points,
+};
+use crate::smoothing::{Ends, gaussian_smooth};
+use crate::vec3::{dot, sub};
+
+/// How [`separation_offsets`] works (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeparationConfig {
+    /// Gap (metres) the pushes aim for beyond touching, so the smoothed track still clears.
+    pub margin_m: f64,
+    /// Gaussian σ of the offset track, in frames.
+    pub sigma_frames: f64,
+    /// Upper bound on push-and-smooth rounds.
+    pub max_rounds: usize,
+}
+
+impl Default for SeparationConfig {
+    /// Our choices: 1 cm margin; σ = 3 frames (0.1 s at 30 fps), short enough to follow a
+    /// partner's step, long enough that a one-frame push becomes a smooth sway; 12 rounds, after
+    /// which the held-out duet followers have no penetrating pair left in practice
+    /// (`docs/duet-eval.md`).
+    fn default() -> Self {
+        Self {
+            margin_m: 0.01,
+            sigma_frames: 3.0,
+            max_rounds: 12,
+        }
+    }
+}
+
+/// The deepest overlap of two posed bodies in one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Overlap {
+    /// Two radii + margin − axis distance (metres); above the margin, the capsules penetrate.
+    pub depth_m: f64,
+    /// Unit horizontal `(x, z)` direction that moves the mover away from the fixed dancer.
+    pub away: [f64; 2],
+}
+
+/// Whether a capsule takes part in the separation (module docs: hands are exempt).
+pub fn is_separated(capsule: &Capsule) -> bool {
+    capsule.part != BodyPart::Hand
+}
+
+/// Horizontal unit vector of `v`, or `None` if `v` is (nearly) vertical.
+fn horizontal_unit(v: [f64; 3]) -> Option<[f64; 2]> {
+    let n = v[0].hypot(v[2]);
+    (n > 1e-6).then(|| [v[0] / n, v[2] / n])
+}
+
+/// Axis-aligned box of the joints, grown by `pad` metres.
+fn bounds(joints: &[[f64; 3]; 24], pad: f64) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for j in joints {
+        for c in 0..3 {
+            lo[c] = lo[c].min(j[c] - pad);
+            hi[c] = hi[c].max(j[c] + pad);
+        }
+    }
+    (lo, hi)
+}
+
+/// The deepest overlap (with `margin_m`) between the separated capsules of `mover` and `fixed`
+/// in one frame, or `None` if every pair is at least `margin_m` apart.
+pub fn deepest_overlap(
+    mover: &[[f64; 3]; 24],
+    fixed: &[[f64; 3]; 24],
+    margin_m: f64,
+) -> Option<Overlap> {
+    // A capsule's surface reaches under 0.2 m past the joints (the head sphere: 0.8 × the
+    // neck–head bone plus its radius); each box also takes half the margin.
+    let pad = 0.2 + 0.5 * margin_m;
+    let (lo_m, hi_m) = bounds(mover, pad);
+    let (lo_f, hi_f) = bounds(fixed, pad);
+    if (0..3).any(|c| lo_m[c] > hi_f[c] || lo_f[c] > hi_m[c]) {
+        return None;
+    }
+    let mut best: Option<(f64, [f64; 3], [f64; 3])> = None;
+    for cm in CAPSULES.iter().filter(|c| is_separated(c)) {
+        let (a0, a1) = capsule_endpoints(mover, cm);
+        for cf in CAPSULES.iter().filter(|c| is_separated(c)) {
+            let reach = cm.radius_m + cf.radius_m + margin_m;
+            let (b0, b1) = capsule_endpoints(fixed, cf);
+            let (pm, pf) = segment_closest_points(a0, a1, b0, b1);
+            let d = sub(pm, pf);
+            let dist_sq = dot(d, d);
+            if dist_sq >= reach * reach {
+                continue;
+            }
+            let depth = reach - dist_sq.sqrt();
+            if best.is_none_or(|(b, _, _)| depth > b) {
+                best = Some((depth, pm, pf));
+            }
+        }
+    }
+    let (depth_m, pm, pf) = best?;
+    let away = horizontal_unit(sub(pm, pf))
+        .or_else(|| horizontal_unit(sub(mover[0], fixed[0])))
+        .unwrap_or([1.0, 0.0]);
+    Some(Overlap { depth_m, away })
+}
+
+/// Horizontal `(x, z)` offsets (metres), one per frame of `mover`, that keep its body out of
+/// `fixed`'s (module docs). Both are flat `(T, 24, 3)` world joints in metres, Y up; frames past
+/// the shorter of the two get no offset. A mover already clear of the fixed dancer gets zeros.
+pub fn separation_offsets(
+    mover: &[f64],
+    fixed: &[f64],
+    config: &SeparationConfig,
+) -> Vec<[f64; 2]> {
+    let t_mover = mover.len() / 72;
+    let t = t_mover.min(fixed.len() / 72);
+    let fixed_frames: Vec<[[f64; 3]; 24]> = (0..t).map(|f| frame_joints(fixed, f)).collect();
+    let mover_frames: Vec<[[f64; 3]; 24]> = (0..t).map(|f| frame_joints(mover, f)).collect();
+    let mut offsets = vec![[0.0f64; 2]; t_mover];
+    for _ in 0..config.max_rounds {
+        let mut penetrating = false;
+        let pushes: Vec<[f64; 2]> = (0..t)
+            .map(|f| {
+                let [ox, oz] = offsets[f];
+                let moved = mover_frames[f].map(|[x, y, z]| [x + ox, y, z + oz]);
+                match deepest_overlap(&moved, &fixed_frames[f], config.margin_m) {
+                    Some(o) => {
+                        penetrating |= o.depth_m > config.margin_m;
+                        [o.away[0] * o.depth_m, o.away[1] * o.depth_m]
+                    }
+                    None => [0.0, 0.0],
+                }
+            })
+            .collect();
+        if !penetrating {
+            break;
+        }
+        for c in 0..2 {
+            let push: Vec<f64> = pushes.iter().map(|p| p[c]).collect();
+            for (f, v) in gaussian_smooth(&push, config.sigma_frames, Ends::Hold)
+                .into_iter()
+                .enumerate()
+            {
+                offsets[f][c] += v;
+            }
+        }
+    }
+    offsets
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::Skeleton;
+
+    /// The SMPL rest pose (T-pose, arms along ±X) standing at `(x, z)`, `frames` times, flat.
+    fn rest_at(x: f64, z: f64, frames: usize) -> Vec<f64> {
+        let rest = Skeleton::smpl24().rest_positions();
+        let mut v = Vec::new();
+        for _ in 0..frames {
+            for p in &rest {
+                v.extend([p[0] + x, p[1] + 1.0, p[2] + z]);
+            }
+        }
+        v
+    }
+
+    fn shifted(joints: &[f64], off: &[[f64; 2]]) -> Vec<f64> {
+        let mut out = joints.to_vec();
+        for (f, o) in off.iter().enumerate() {
+            for j in 0..24 {
+                out[(f * 24 + j) * 3] += o[0];
+                out[(f * 24 + j) * 3 + 2] += o[1];
+            }
+        }
+        out
+    }
+
+    fn penetrating_frames(mover: &[f64], fixed: &[f64]) -> usize {
+        (0..mover.len() / 72)
+            .filter(|&f| {
+                deepest_overlap(&frame_joints(mover, f), &frame_joints(fixed, f), 0.0).is_some()
+            })
+            .count()
+    }
+
+    #[test]
+    fn a_dancer_clear_of_the_partner_is_not_moved() {
+        let (m, f) = (rest_at(0.0, 1.0, 20), rest_at(0.0, 0.0, 20));
+        let off = separation_offsets(&m, &f, &SeparationConfig::default());
+        assert_eq!(off.len(), 20);
+        assert!(off.iter().all(|o| *o == [0.0, 0.0]));
+    }
+
+    #[test]
+    fn overlapping_bodies_are_pushed_apart_along_the_line_between_them() {
+        // Face to face 0.15 m apart along Z: the trunks interpenetrate.
+        let (m, f) = (rest_at(0.0, 0.15, 30), rest_at(0.0, 0.0, 30));
+        assert_eq!(penetrating_frames(&m, &f), 30);
+        let off = separation_offsets(&m, &f, &SeparationConfig::default());
+        assert_eq!(penetrating_frames(&shifted(&m, &off), &f), 0);
+        for o in &off {
+            // Away from the partner (+Z), not sideways, and not much further than needed: the
+            // trunks are 0.24 m thick together.
+            // (The SMPL rest pose is not exactly symmetric: a little X.)
+            assert!(o[1] > 0.05 && o[1] < 0.3 && o[0].abs() < 0.01, "{o:?}");
+        }
+    }
+
+    #[test]
+    fn hands_may_touch() {
+        // Side by side along X in the T-pose: the mover's right hand (−X) meets the fixed
+        // dancer's left hand (+X). Wrists are 0.25 m apart, so only the hand capsules (which
+        // reach 0.6 × the wrist–hand bone past the hand joint) overlap.
+        let rest = Skeleton::smpl24().rest_positions();
+        let gap = 2.0 * rest[20][0] + 0.25;
+        let (m, f) = (rest_at(gap, 0.0, 5), rest_at(0.0, 0.0, 5));
+        let hand_l = &CAPSULES[13];
+        let hand_r = &CAPSULES[14];
+        assert_eq!((hand_l.part, hand_r.part), (BodyPart::Hand, BodyPart::Hand));
+        let (a0, a1) = capsule_endpoints(&frame_joints(&m, 0), hand_r);
+        let (b0, b1) = capsule_endpoints(&frame_joints(&f, 0), hand_l);
+        let d = crate::capsule_body::segment_distance_sq(a0, a1, b0, b1).sqrt();
+        assert!(
+            d < hand_l.radius_m + hand_r.radius_m,
+            "hands should touch: {d}"
+        );
+        let off = separation_offsets(&m, &f, &SeparationConfig::default());
+        assert!(off.iter().all(|o| *o == [0.0, 0.0]));
+    }
+
+    #[test]
+    fn a_brief_collision_gets_a_smooth_local_sway() {
+        // 60 frames 1 m apart, except frames 28–31 where the mover stands 0.2 m away.
+        let t = 60;
+        let mut m = rest_at(0.0, 1.0, t);
+        let close = rest_at(0.0, 0.2, 4);
+        m[28 * 72..32 * 72].copy_from_slice(&close);
+        let f = rest_at(0.0, 0.0, t);
+        let off = separation_offsets(&m, &f, &SeparationConfig::default());
+        assert_eq!(penetrating_frames(&shifted(&m, &off), &f), 0);
+        // Local: nothing beyond 3σ (9 frames) of the collision; smooth: the frame-to-frame change stays a fraction of the
+        // peak instead of a one-frame jump.
+        assert!(off[..19].iter().chain(&off[41..]).all(|o| *o == [0.0, 0.0]));
+        let peak = off.iter().map(|o| o[1]).fold(0.0, f64::max);
+        let step = off
+            .windows(2)
+            .map(|w| (w[1][1] - w[0][1]).abs())
+            .fold(0.0, f64::max);
+        assert!(peak > 0.02 && step < 0.5 * peak, "peak {peak} step {step}");
+    }
+
+    #[test]
+    fn vertical_lines_fall_back_to_pelvis_then_x() {
+        let mut a = frame_joints(&rest_at(0.0, 0.0, 1), 0);
+        let b = a;
+        // Identical bodies: the closest points coincide; pelvis to pelvis is zero too.
+        let o = deepest_overlap(&a, &b, 0.0).expect("same body overlaps");
+        assert_eq!(o.away, [1.0, 0.0]);
+        for j in &mut a {
+            j[2] += 0.01;
+        }
+        let o = deepest_overlap(&a, &b, 0.0).expect("still overlapping");
+        assert!(o.away[1] > 0.99, "{o:?}");
+    }
+}
