@@ -42,7 +42,9 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting hel
 
 # name, label, sampler (decides the seams)
 CONFIGS = [
-    ("full", "ReactDance (full system: BLC + layer-wise guidance)", "blc"),
+    ("full", "ReactDance (full system: BLC + layer-wise guidance + separation)", "blc"),
+    ("no_separation", "w/o couple separation (`--no-separation`; the model's raw placement)",
+     "blc"),
     ("single_cfg", "single-scale CFG (`--guidance 2.0`, s = 1 on every level)", "blc"),
     ("autoregressive", "autoregressive sampling (`--sampler autoregressive`, w/o BLC)",
      "autoregressive"),
@@ -420,7 +422,7 @@ def cmd_report(args):
            "side only)")
     w(f"- **Boundary jerk** (↓; ≈ 1 = seams as smooth as the rest, ≫ 1 = pose jumps at the "
       f"seams): mean jerk within ±2 frames of the sampler's seams divided by the mean jerk "
-      f"elsewhere. BLC (full system, single-scale CFG, m64, no_pm) has its seams at every "
+      f"elsewhere. BLC (full system, no_separation, single-scale CFG, m64, no_pm) has its seams at every "
       f"block of 60 latent tokens ({real_window} frames for the 4-frame tokens), exactly "
       f"`dancegen eval --window <block>`'s grid, so eval's value is used as is. The "
       f"autoregressive sampler's seams are where each window's new half begins (after the "
@@ -433,7 +435,13 @@ def cmd_report(args):
     w("- **m64** is the same system trained with sliding windows every 64 frames instead of "
       "every 4 (fewer, less overlapping training windows); **no_pm** trains the autoencoder "
       "without progressive masking; **single_cfg** replaces the layer-wise guidance (LDCFG, "
-      "one scale per HFSQ level) by one scale s = 1 for every level.")
+      "one scale per HFSQ level) by one scale s = 1 for every level; **no_separation** keeps "
+      "the follower where the model put it. The separation (ours, not in the paper: "
+      "`dancegen_motion::couple_separation`) moves the follower horizontally, by a smooth "
+      "offset, out of the leader's capsule body wherever trunks, heads, arms or legs overlap; "
+      "hands may touch. Its capsule body is the canonical one of the self-penetration "
+      "measures, not IPR's coarser bone capsules, and its settings were not tuned on these "
+      "clips.")
     w("")
 
     # ---- generation time

@@ -8,15 +8,17 @@
 #
 # Environment (all optional):
 #   SEEDS="0 1 2"        seeds per configuration
-#   CONFIGS="full single_cfg autoregressive m64 no_pm"
-#       full            MODEL, default sampling (BLC + layer-wise guidance)
+#   CONFIGS="full no_separation single_cfg autoregressive m64 no_pm"
+#       full            MODEL, default sampling (BLC + layer-wise guidance) and couple separation
+#       no_separation   MODEL, --no-separation (the follower where the model put it)
 #       single_cfg      MODEL, --guidance 2.0 (one scale s = 1 for every level, no LDCFG)
 #       autoregressive  MODEL, --sampler autoregressive (w/o BLC)
 #       m64             MODEL_M64 (trained with sliding-window stride 64 instead of 4)
 #       no_pm           MODEL_NO_PM (autoencoder trained without progressive masking)
 #     a configuration whose model directory does not exist is skipped (noted in the report)
 #   MODEL=models/reactdance-small
-#   MODEL_M64=target/models/reactdance-m64   MODEL_NO_PM=target/models/reactdance-no-pm
+#   MODEL_M64=target/models/reactdance-small-m64   MODEL_NO_PM=target/models/reactdance-small-no-pm
+#       (bundled from the runs of configs/ablations/reactdance_*.toml with `dancegen bundle`)
 #   STEPS=N              denoising steps for every configuration (default: each model's own)
 #   DATASET=target/datasets/duet (built by `dancegen dataset build --pairing duet`)
 #   DANCEGEN=path/to/dancegen (default: target/release/dancegen; snapshotted into $OUT/bin)
@@ -43,12 +45,12 @@ for a in "$@"; do
     esac
 done
 
-ALL_CONFIGS="full single_cfg autoregressive m64 no_pm"
+ALL_CONFIGS="full no_separation single_cfg autoregressive m64 no_pm"
 SEEDS=${SEEDS:-"0 1 2"}
 CONFIGS=${CONFIGS:-$ALL_CONFIGS}
 MODEL=${MODEL:-$ROOT/models/reactdance-small}
-MODEL_M64=${MODEL_M64:-$ROOT/target/models/reactdance-m64}
-MODEL_NO_PM=${MODEL_NO_PM:-$ROOT/target/models/reactdance-no-pm}
+MODEL_M64=${MODEL_M64:-$ROOT/target/models/reactdance-small-m64}
+MODEL_NO_PM=${MODEL_NO_PM:-$ROOT/target/models/reactdance-small-no-pm}
 STEPS=${STEPS:-}
 DATASET=${DATASET:-$ROOT/target/datasets/duet}
 PYTHON=${PYTHON:-python3}
@@ -91,7 +93,7 @@ rel() { # relative to the repository root if inside it, else absolute
 # ---- configurations: model directory and flags; skipped when the model does not exist
 model_of() {
     case $1 in
-        full|single_cfg|autoregressive) echo "$MODEL" ;;
+        full|no_separation|single_cfg|autoregressive) echo "$MODEL" ;;
         m64) echo "$MODEL_M64" ;;
         no_pm) echo "$MODEL_NO_PM" ;;
     esac
@@ -99,6 +101,7 @@ model_of() {
 flags_of() {
     case $1 in
         full|m64|no_pm) echo "" ;;
+        no_separation) echo "--no-separation" ;;
         single_cfg) echo "--guidance 2.0" ;;
         autoregressive) echo "--sampler autoregressive" ;;
     esac
@@ -247,8 +250,8 @@ for v in STEPS CONFIGS SEEDS MODEL_NO_PM MODEL_M64 MODEL; do
         CONFIGS) default=$ALL_CONFIGS ;;
         STEPS) default="" ;;
         MODEL) default=$ROOT/models/reactdance-small ;;
-        MODEL_M64) default=$ROOT/target/models/reactdance-m64 ;;
-        MODEL_NO_PM) default=$ROOT/target/models/reactdance-no-pm ;;
+        MODEL_M64) default=$ROOT/target/models/reactdance-small-m64 ;;
+        MODEL_NO_PM) default=$ROOT/target/models/reactdance-small-no-pm ;;
     esac
     val=${!v}
     case $v in MODEL*) [ "$(realpath -m "$val")" = "$(realpath -m "$default")" ] && val=$default; val_show=$(rel "$val") ;; *) val_show=$val ;; esac
