@@ -247,8 +247,9 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
             match separation {
                 None => "no separation".to_string(),
                 Some(_) => format!(
-                    "separated from the leader by up to {:.0} mm",
-                    out.separation_max_m * 1000.0
+                    "separated from the leader by up to {:.0} mm in {:.2} s",
+                    out.separation_max_m * 1000.0,
+                    out.separate_s
                 ),
             }
         )?;

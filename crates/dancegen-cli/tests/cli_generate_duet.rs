@@ -92,6 +92,33 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     };
     let gap = pelvis_gap(&f, &l);
     assert!(gap < 1.5, "mean pelvis distance {gap} m");
+    // The separation takes the follower out of the leader's body: fewer frames with trunks,
+    // heads, arms or legs overlapping than the model's raw placement (`--no-separation`).
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--leader",
+        &leader_bvh(),
+        "--steps",
+        "8",
+        "--no-separation",
+        "-o",
+        &out("raw.npy"),
+    ]));
+    let (_, raw) = joints(&dir.path().join("raw.npy"));
+    let overlapping = |f: &[f64]| {
+        use dancegen_motion::capsule_body::frame_joints;
+        use dancegen_motion::couple_separation::deepest_overlap;
+        (0..t)
+            .filter(|&k| deepest_overlap(&frame_joints(f, k), &frame_joints(&l, k), 0.0).is_some())
+            .count()
+    };
+    let (sep_n, raw_n) = (overlapping(&f), overlapping(&raw));
+    assert!(
+        sep_n <= raw_n && (raw_n == 0 || sep_n < raw_n),
+        "overlapping frames: {sep_n} separated, {raw_n} raw, of {t}"
+    );
     // The same leader 5 m further along x: the same follower (same seed), 5 m further.
     let moved = dir.path().join("moved.npz");
     let mut m =

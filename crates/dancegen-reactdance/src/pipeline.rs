@@ -36,6 +36,8 @@ pub struct Generated {
     pub decode_s: f64,
     /// Largest horizontal offset (metres) the separation gave the follower; 0 without it.
     pub separation_max_m: f64,
+    /// Seconds spent on the separation.
+    pub separate_s: f64,
 }
 
 /// `rows` frames of `width` values padded to `frames` by repeating the last frame.
@@ -138,6 +140,7 @@ pub fn generate_follower(
     }
     let decode_s = t1.elapsed().as_secs_f64();
     let mut separation_max_m = 0.0f64;
+    let t2 = Instant::now();
     if let Some(config) = separation {
         let joints = |m: &SmplMotion| -> Result<Vec<f64>, String> {
             let j = m.joints_world().map_err(|e| e.to_string())?;
@@ -158,5 +161,6 @@ pub fn generate_follower(
         sample_s,
         decode_s,
         separation_max_m,
+        separate_s: t2.elapsed().as_secs_f64(),
     })
 }
