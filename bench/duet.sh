@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ReactDance duet generation speed: the latent BLC sampler (LDCFG, DDIM 20 steps, 2000 frames)
+# ReactDance duet generation speed: the latent BLC sampler (LDCFG, the model's DDIM steps, 2000 frames)
 # plus the HFSQ decoder on burn-flex vs the same architecture and step count in PyTorch CPU
 # (interleaved in one run), then `dancegen generate SONG --leader LEADER` end to end for a
 # 2000-frame (66.7 s) leader against the 2 s budget.
@@ -18,6 +18,8 @@
 # time / burn time (> 1 = Rust faster).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=bench/lib.sh
+source "$here/lib.sh"
 root="$(cd "$here/.." && pwd)"
 rounds="${1:-3}"
 case="${2:-}"
@@ -28,25 +30,14 @@ model="${DUET_MODEL:-$root/models/reactdance-small}"
 solo_model="$root/models/lodgepp-small"
 exe="$root/target/release/dancegen"
 frames=2000
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q torch numpy
-fi
-py="$venv/bin/python"
+py=$(torch_python "$venv")
 out="${DUET_RESULTS:-$(mktemp)}"
 : > "$out"
 echo "results: $out" >&2
 echo "load before: $(uptime)" >&2
 
 if [ "${DUET_SKIP_DENOISER:-0}" != 1 ]; then
-  cargo bench -q -p dancegen-reactdance --bench blc_sampling --manifest-path "$root/Cargo.toml" --no-run
-  bin=$(cargo bench -p dancegen-reactdance --bench blc_sampling --manifest-path "$root/Cargo.toml" \
-    --no-run --message-format=json 2>/dev/null | "$py" -c '
-import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "blc_sampling" and m.get("executable"):
-        print(m["executable"])')
+  bin=$(bench_binary dancegen-reactdance blc_sampling "$py")
   for r in $(seq "$rounds"); do
     echo "round $r/$rounds: burn-flex" >&2
     RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"

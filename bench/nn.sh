@@ -7,30 +7,22 @@
 # and the speed ratio PyTorch time / burn time (1.0 = parity, higher = burn faster).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=bench/lib.sh
+source "$here/lib.sh"
 root="$(cd "$here/.." && pwd)"
 rounds="${1:-3}"
 case="${2:-}"
 venv="${DANCEGEN_TORCH_VENV:-$here/.venv-torch}"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q torch numpy safetensors
-fi
-cargo bench -q -p dancegen-nn --bench denoiser --manifest-path "$root/Cargo.toml" --no-run
-bin=$(cargo bench -p dancegen-nn --bench denoiser --manifest-path "$root/Cargo.toml" --no-run \
-  --message-format=json 2>/dev/null | "$venv/bin/python" -c '
-import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "denoiser" and m.get("executable"):
-        print(m["executable"])')
+py=$(torch_python "$venv" safetensors)
+bin=$(bench_binary dancegen-nn denoiser "$py")
 out=$(mktemp)
 threads=$(nproc)
 for r in $(seq "$rounds"); do
   echo "round $r/$rounds" >&2
   RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"
-  OMP_NUM_THREADS=$threads "$venv/bin/python" "$here/nn_denoiser.py" $case >> "$out"
+  OMP_NUM_THREADS=$threads "$py" "$here/nn_denoiser.py" $case >> "$out"
 done
-"$venv/bin/python" - "$out" <<'PY'
+"$py" - "$out" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 cases = sorted({r["case"] for r in rows})

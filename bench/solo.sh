@@ -14,6 +14,8 @@
 # message when the model is missing. Ratio = PyTorch time / burn time (> 1 = Rust faster).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=bench/lib.sh
+source "$here/lib.sh"
 root="$(cd "$here/.." && pwd)"
 rounds="${1:-3}"
 case="${2:-}"
@@ -21,25 +23,14 @@ venv="${DANCEGEN_TORCH_VENV:-$here/.venv-torch}"
 threads=$(nproc)
 songs="${SOLO_SONGS:-$root/../shared/data/music/sectoid}"
 model="$root/models/lodgepp-small"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q torch numpy
-fi
-py="$venv/bin/python"
+py=$(torch_python "$venv")
 out="${SOLO_RESULTS:-$(mktemp)}"
 : > "$out"
 echo "results: $out" >&2
 echo "load before: $(uptime)" >&2
 
 if [ "${SOLO_SKIP_DENOISER:-0}" != 1 ]; then
-  cargo bench -q -p dancegen-lodgepp --bench pddm_sampling --manifest-path "$root/Cargo.toml" --no-run
-  bin=$(cargo bench -p dancegen-lodgepp --bench pddm_sampling --manifest-path "$root/Cargo.toml" \
-    --no-run --message-format=json 2>/dev/null | "$py" -c '
-import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "pddm_sampling" and m.get("executable"):
-        print(m["executable"])')
+  bin=$(bench_binary dancegen-lodgepp pddm_sampling "$py")
   for r in $(seq "$rounds"); do
     echo "round $r/$rounds: burn-flex" >&2
     RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"

@@ -36,14 +36,9 @@ set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
-DRY=0
-for a in "$@"; do
-    case $a in
-        --dry-run) DRY=1 ;;
-        -h|--help) awk 'NR > 1 && !/^#/ {exit} NR > 1 {sub(/^# ?/, ""); print}' "$0"; exit 0 ;;
-        *) echo "unknown argument $a (see --help)" >&2; exit 2 ;;
-    esac
-done
+# shellcheck source=tools/eval_lib.sh
+source "$ROOT/tools/eval_lib.sh"
+parse_eval_args "$0" "$@"
 
 ALL_CONFIGS="full no_separation single_cfg autoregressive m64 no_pm"
 SEEDS=${SEEDS:-"0 1 2"}
@@ -64,8 +59,7 @@ mkdir -p "$OUT"
 OUT=$(realpath "$OUT")
 HELP="$PYTHON $ROOT/tools/duet_eval.py"
 T0=$(date +%s)
-# Other CPU users at the start (reported: timings depend on them).
-LOAD_NOTE="$(pgrep -c -f 'dancegen[^ ]* train ' || true) \`dancegen train\` processes running at the start, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+LOAD_NOTE=$(load_note)
 log() { echo "[duet-eval $(date -u +%H:%M:%S)] $*" >&2; }
 for c in $CONFIGS; do
     case " $ALL_CONFIGS " in *" $c "*) ;; *) echo "unknown configuration $c (known: $ALL_CONFIGS)" >&2; exit 2 ;; esac
@@ -78,9 +72,7 @@ if ! { [ -x "$SRC_BIN" ] && "$SRC_BIN" generate --help 2>/dev/null | grep -q -- 
         "\`cargo build --release -p dancegen-cli\` or set DANCEGEN" >&2
     exit 1
 fi
-mkdir -p "$OUT/bin"
-BIN=$OUT/bin/dancegen
-ln -f "$SRC_BIN" "$BIN" 2>/dev/null || cp -f "$SRC_BIN" "$BIN"
+snapshot_binary "$SRC_BIN" "$OUT"
 log "binary: $SRC_BIN"
 
 [ -f "$DATASET/manifest.json" ] || { echo "$DATASET/manifest.json missing: build the duet data set first" >&2; exit 1; }

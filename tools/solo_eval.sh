@@ -26,14 +26,9 @@ set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
-DRY=0
-for a in "$@"; do
-    case $a in
-        --dry-run) DRY=1 ;;
-        -h|--help) awk 'NR > 1 && !/^#/ {exit} NR > 1 {sub(/^# ?/, ""); print}' "$0"; exit 0 ;;
-        *) echo "unknown argument $a (see --help)" >&2; exit 2 ;;
-    esac
-done
+# shellcheck source=tools/eval_lib.sh
+source "$ROOT/tools/eval_lib.sh"
+parse_eval_args "$0" "$@"
 
 SEEDS=${SEEDS:-"0 1 2"}
 CONFIGS=${CONFIGS:-"full no_global no_foot_refine no_pen_guidance no_foot_lock edge"}
@@ -51,8 +46,7 @@ if [ "$DRY" = 1 ]; then
 fi
 HELP="$PYTHON $ROOT/tools/solo_eval.py"
 T0=$(date +%s)
-# Other CPU users at the start (reported: timings depend on them).
-LOAD_NOTE="$(pgrep -c -f 'dancegen train' || true) \`dancegen train\` processes running at the start, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+LOAD_NOTE=$(load_note)
 log() { echo "[solo-eval $(date -u +%H:%M:%S)] $*" >&2; }
 
 # ---- the binary: snapshot it (hard link) so a rebuild during the run cannot swap it midway
@@ -68,9 +62,7 @@ else
     SRC_BIN=$ROOT/target/debug/dancegen
 fi
 has_generate "$SRC_BIN" || { echo "$SRC_BIN: no 'generate' subcommand" >&2; exit 1; }
-mkdir -p "$OUT/bin"
-BIN=$OUT/bin/dancegen
-ln -f "$SRC_BIN" "$BIN" 2>/dev/null || cp -f "$SRC_BIN" "$BIN"
+snapshot_binary "$SRC_BIN" "$OUT"
 log "binary: $SRC_BIN"
 
 [ -f "$DATASET/manifest.json" ] || { echo "$DATASET/manifest.json missing: build the solo data set first" >&2; exit 1; }
