@@ -38,6 +38,7 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting hel
     opt_load,
     stats,
     write_npy,
+    write_report,
 )
 
 # name, label, sampler (decides the seams)
@@ -476,12 +477,7 @@ def cmd_report(args):
       "of earlier runs with the same model files and flags are reused, so the run's wall time "
       "can be shorter).")
     w("")
-    os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
-    tmp = args.report + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(L))
-    os.replace(tmp, args.report)
-    print(f"wrote {args.report}")
+    write_report(args.report, L)
 
 
 def main():

@@ -94,6 +94,16 @@ def write_npy(path, values, descr="<f4", shape=None):
 # ----------------------------------------------------------------------------- metrics
 
 
+def write_report(path, lines):
+    """Writes the report's lines through a temporary file, so a failed run leaves the old one."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines))
+    os.replace(tmp, path)
+    print(f"wrote {path}")
+
+
 def mean_joint_jerk(p, frames):
     """dancegen_metrics::longform::mean_joint_jerk on a flat (T, 24, 3) array."""
     fl = 72
@@ -606,12 +616,7 @@ def cmd_report(args):
       f"{total / 60:.0f} min (outputs of an earlier, interrupted run of the same command and "
       "model are reused, so the wall time above can be shorter).")
     w("")
-    os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
-    tmp = args.report + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(L))
-    os.replace(tmp, args.report)
-    print(f"wrote {args.report}")
+    write_report(args.report, L)
 
 
 def main():
