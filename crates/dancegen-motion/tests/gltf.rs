@@ -9,23 +9,19 @@
 
 mod common;
 
+use common::gltf_validator::validate;
 use dancegen_motion::aistpp::load_motion;
 use dancegen_motion::fk::fk_axis_angle_f32;
 use dancegen_motion::gltf::{GlbInputError, GlbOptions, GltfError, glb_bytes, write_glb};
 use dancegen_motion::rotation::axis_angle_to_quat;
 use dancegen_motion::skeleton::Skeleton;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::Mutex;
 
 /// SMPL rest pelvis for AIST++ (shared/data/README.md): AIST++ world pelvis in metres is
 /// `PELVIS_REST + smpl_trans / smpl_scaling`, because `Skeleton::smpl24()` has a zero root
 /// offset and FK puts joint 0 at the translation.
 const PELVIS_REST: [f32; 3] = [-0.0021, -0.2444, 0.0282];
 const AISTPP_SEQ: &str = "gBR_sBM_cAll_d04_mBR2_ch08";
-/// Pinned: the package only publishes 2.0.0-dev pre-releases, which `@2` does not match.
-const VALIDATOR_PACKAGE: &str = "gltf-validator@2.0.0-dev.3.10";
 
 /// A parsed `.glb`: its JSON document and BIN chunk.
 struct Glb {
@@ -522,69 +518,6 @@ fn real_aistpp_motion() {
         "pelvis height {}",
         world[0][1]
     );
-}
-
-/// Installs the validator once per test binary and returns its npm prefix.
-fn validator_prefix() -> PathBuf {
-    static LOCK: Mutex<()> = Mutex::new(());
-    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let prefix = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gltf-validator");
-    let installed = prefix.join("node_modules/gltf-validator/package.json");
-    if !installed.is_file() {
-        std::fs::create_dir_all(&prefix).unwrap();
-        let out = Command::new("npm")
-            .args(["install", "--no-audit", "--no-fund", "--prefix"])
-            .arg(&prefix)
-            .arg(VALIDATOR_PACKAGE)
-            .output()
-            .unwrap_or_else(|e| {
-                panic!("the glTF validator test needs npm (Node.js) on the PATH: {e}")
-            });
-        assert!(
-            out.status.success() && installed.is_file(),
-            "`npm install {VALIDATOR_PACKAGE}` into {} failed (is the npm registry reachable?):\n{}",
-            prefix.display(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    prefix
-}
-
-/// Runs the Khronos validator on `path`, prints the issue counts and messages and returns the
-/// report.
-fn validate(path: &Path) -> Value {
-    let prefix = validator_prefix();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/gltf_validate.mjs");
-    let out = Command::new("node")
-        .arg(&script)
-        .arg(&prefix)
-        .arg(path)
-        .output()
-        .unwrap_or_else(|e| panic!("the glTF validator test needs node on the PATH: {e}"));
-    assert!(
-        out.status.success(),
-        "validator script failed on {}:\n{}",
-        path.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: Value = serde_json::from_slice(&out.stdout).expect("validator prints JSON");
-    let issues = &report["issues"];
-    eprintln!(
-        "{}: validator {}: {} errors, {} warnings, {} infos, {} hints",
-        path.display(),
-        report["validatorVersion"],
-        issues["numErrors"],
-        issues["numWarnings"],
-        issues["numInfos"],
-        issues["numHints"]
-    );
-    for m in issues["messages"].as_array().into_iter().flatten() {
-        eprintln!(
-            "  [{}] {} {}: {}",
-            m["severity"], m["code"], m["pointer"], m["message"]
-        );
-    }
-    report
 }
 
 #[test]

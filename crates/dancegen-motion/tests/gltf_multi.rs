@@ -1,8 +1,11 @@
 //! Several dancers in one `.glb`: layout (per-dancer joints, skins, meshes, materials and
 //! channels), each dancer's hierarchy against forward kinematics, input errors, the
 //! single-dancer output staying as before, `save_motion_file` on a group, and the Khronos
-//! glTF-Validator (installed as in `tests/gltf.rs`).
+//! glTF-Validator (`tests/common/gltf_validator.rs`).
 
+mod common;
+
+use common::gltf_validator::validate;
 use dancegen_motion::fk::fk_axis_angle_f32;
 use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
 use dancegen_motion::gltf::{
@@ -12,10 +15,6 @@ use dancegen_motion::gltf::{
 use dancegen_motion::repr::SmplMotion;
 use dancegen_motion::skeleton::Skeleton;
 use serde_json::{Value, json};
-use std::path::Path;
-use std::process::Command;
-
-const VALIDATOR_PACKAGE: &str = "gltf-validator@2.0.0-dev.3.10";
 
 /// JSON document and BIN chunk of a GLB, after checking the container header.
 fn parse_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
@@ -373,26 +372,6 @@ fn save_motion_file_writes_every_dancer() {
 
 #[test]
 fn khronos_validator_accepts_duet() {
-    let prefix = Path::new(env!("CARGO_TARGET_TMPDIR")).join("gltf-validator");
-    if !prefix
-        .join("node_modules/gltf-validator/package.json")
-        .is_file()
-    {
-        std::fs::create_dir_all(&prefix).unwrap();
-        let out = Command::new("npm")
-            .args(["install", "--no-audit", "--no-fund", "--prefix"])
-            .arg(&prefix)
-            .arg(VALIDATOR_PACKAGE)
-            .output()
-            .unwrap_or_else(|e| {
-                panic!("the glTF validator test needs npm (Node.js) on the PATH: {e}")
-            });
-        assert!(
-            out.status.success(),
-            "`npm install {VALIDATOR_PACKAGE}` failed (is the npm registry reachable?):\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
     let sk = Skeleton::smpl24();
     let motions = [motion(30, sk.len(), 0.0), motion(30, sk.len(), 1.0)];
     let dir = tempfile::tempdir().unwrap();
@@ -405,29 +384,7 @@ fn khronos_validator_accepts_duet() {
         &GlbOptions::default(),
     )
     .unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/gltf_validate.mjs");
-    let out = Command::new("node")
-        .arg(&script)
-        .arg(&prefix)
-        .arg(&path)
-        .output()
-        .unwrap_or_else(|e| panic!("the glTF validator test needs node on the PATH: {e}"));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
-    for m in report["issues"]["messages"]
-        .as_array()
-        .into_iter()
-        .flatten()
-    {
-        eprintln!(
-            "  [{}] {} {}: {}",
-            m["severity"], m["code"], m["pointer"], m["message"]
-        );
-    }
+    let report = validate(&path);
     assert_eq!(report["issues"]["numErrors"], 0, "validation errors");
     assert_eq!(report["issues"]["numWarnings"], 0, "validation warnings");
     assert_eq!(report["info"]["animationCount"], 1);

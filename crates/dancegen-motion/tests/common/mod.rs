@@ -12,3 +12,4 @@ pub fn shared_dir() -> PathBuf {
     );
     shared
 }
+pub mod gltf_validator;
