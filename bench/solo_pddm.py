@@ -49,6 +49,9 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from torch_blocks import LN_EPS, Attention, EncoderLayer, Film, Mlp  # noqa: E402
+
 D_MOTION, MUSIC_DIMS, FOOT_FEATURES = 151, 35, 32
 # Sizes from the shipped config's [model.pddm] (the Rust bench reads the same file); the
 # defaults are dancegen_lodgepp::config::PddmConfig::default().
@@ -133,66 +136,15 @@ def rotate(x, tables):
     return x * cos + half * sin
 
 
-class Attention(nn.Module):
-    def __init__(self, d, h):
-        super().__init__()
-        self.h = h
-        self.q_proj, self.k_proj = nn.Linear(d, d), nn.Linear(d, d)
-        self.v_proj, self.out_proj = nn.Linear(d, d), nn.Linear(d, d)
-
-    def split(self, x):
-        b, t, d = x.shape
-        return x.reshape(b, t, self.h, d // self.h).transpose(1, 2)
-
-    def project_kv(self, k, v):
-        return self.split(self.k_proj(k)), self.split(self.v_proj(v))
-
-    def forward(self, q, k, v, kv=None):
-        b, tq, d = q.shape
-        kk, vv = kv if kv is not None else self.project_kv(k, v)
-        o = F.scaled_dot_product_attention(self.split(self.q_proj(q)), kk, vv)
-        return self.out_proj(o.transpose(1, 2).reshape(b, tq, d))
-
-
-class Mlp(nn.Module):
-    def __init__(self, d, ff):
-        super().__init__()
-        self.linear1, self.linear2 = nn.Linear(d, ff), nn.Linear(ff, d)
-
-    def forward(self, x):
-        return self.linear2(F.gelu(self.linear1(x)))
-
-
-class Film(nn.Module):
-    def __init__(self, d):
-        super().__init__()
-        self.linear = nn.Linear(d, 2 * d)
-
-    def forward(self, x, cond):
-        scale, shift = self.linear(F.mish(cond))[:, None].chunk(2, -1)
-        return x * (scale + 1) + shift
-
-
-class EncoderLayer(nn.Module):
-    """Post-norm (PyTorch's TransformerEncoderLayer default), GELU."""
-
-    def __init__(self, d, h, ff):
-        super().__init__()
-        self.self_attn, self.ff = Attention(d, h), Mlp(d, ff)
-        self.norm1, self.norm2 = nn.LayerNorm(d), nn.LayerNorm(d)
-
-    def forward(self, x):
-        x = self.norm1(x + self.self_attn(x, x, x))
-        return self.norm2(x + self.ff(x))
-
-
 class FilmDecoderLayer(nn.Module):
     """Norm-first; rotary on the self-attention q/k input when tables are given."""
 
     def __init__(self, d, h, ff):
         super().__init__()
         self.self_attn, self.cross_attn, self.ff = Attention(d, h), Attention(d, h), Mlp(d, ff)
-        self.norm1, self.norm2, self.norm3 = nn.LayerNorm(d), nn.LayerNorm(d), nn.LayerNorm(d)
+        self.norm1 = nn.LayerNorm(d, eps=LN_EPS)
+        self.norm2 = nn.LayerNorm(d, eps=LN_EPS)
+        self.norm3 = nn.LayerNorm(d, eps=LN_EPS)
         self.film1, self.film2, self.film3 = Film(d), Film(d), Film(d)
 
     def forward(self, x, memory, cond, rotary, kv=None):
