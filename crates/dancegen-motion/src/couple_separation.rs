@@ -15,7 +15,10 @@
 //!   penetration. Every other pair (trunk, head, shoulders, arms, legs, feet) counts.
 //! - Each round, the deepest overlap of every frame (two radii + [`SeparationConfig::margin_m`]
 //!   − axis distance) gives a push of that depth, horizontal, from the fixed dancer's closest
-//!   axis point towards the mover's (pelvis to pelvis where that line is vertical). The pushes
+//!   axis point towards the mover's: the smallest move that clears the pair. Where that
+//!   direction points towards the partner (an arm round the partner's back, limbs interlocked)
+//!   or is vertical, the push is along the pelvis-to-pelvis line instead, so the mover steps
+//!   back rather than through, and neighbouring frames do not push opposite ways. The pushes
 //!   are Gaussian-smoothed (σ = `sigma_frames`, cut at 3σ, ends held) and added to the offset
 //!   track, so the correction never jumps and stays within 3σ of the frames that need it.
 //!   Smoothing lowers a peak, so rounds repeat until no capsule pair penetrates or `max_rounds`
@@ -64,6 +67,9 @@ pub struct Overlap {
     /// Unit horizontal `(x, z)` direction that moves the mover away from the fixed dancer.
     pub away: [f64; 2],
 }
+
+/// Pelvises closer than this (metres, horizontally) give no direction to step back along.
+const PELVIS_AXIS_MIN_M: f64 = 0.05;
 
 /// Whether a capsule takes part in the separation (module docs: hands are exempt).
 pub fn is_separated(capsule: &Capsule) -> bool {
@@ -140,9 +146,18 @@ pub fn deepest_overlap(
         }
     }
     let (depth_m, pm, pf) = best?;
-    let away = horizontal_unit(sub(pm, pf))
-        .or_else(|| horizontal_unit(sub(mover[0], fixed[0])))
-        .unwrap_or([1.0, 0.0]);
+    let pelvis = sub(mover[0], fixed[0]);
+    let axis = (pelvis[0].hypot(pelvis[2]) >= PELVIS_AXIS_MIN_M)
+        .then(|| horizontal_unit(pelvis))
+        .flatten();
+    let away = match (horizontal_unit(sub(pm, pf)), axis) {
+        // An arm reaching round the partner's back: its closest-point push points through
+        // the partner, and neighbouring frames push opposite ways; step back instead.
+        (Some(c), Some(a)) if c[0] * a[0] + c[1] * a[1] < 0.0 => a,
+        (Some(c), _) => c,
+        (None, Some(a)) => a,
+        (None, None) => [1.0, 0.0],
+    };
     Some(Overlap { depth_m, away })
 }
 
@@ -300,6 +315,21 @@ mod tests {
             .map(|w| (w[1][1] - w[0][1]).abs())
             .fold(0.0, f64::max);
         assert!(peak > 0.02 && step < 0.5 * peak, "peak {peak} step {step}");
+    }
+
+    #[test]
+    fn an_arm_round_the_partners_back_steps_back_instead_of_through() {
+        // The mover 0.6 m in front (+Z) of the fixed dancer, its left arm reaching 0.2 m
+        // behind the fixed dancer's chest: the closest-point push would point further back
+        // (−Z, through the partner); the mover steps back along +Z instead.
+        let mut m = frame_joints(&rest_at(0.0, 0.6, 1), 0);
+        let f = frame_joints(&rest_at(0.0, 0.0, 1), 0);
+        let chest = f[9];
+        m[18] = [chest[0] + 0.1, chest[1], chest[2] - 0.1];
+        m[20] = [chest[0], chest[1], chest[2] - 0.2];
+        m[22] = [chest[0] - 0.05, chest[1], chest[2] - 0.22];
+        let o = deepest_overlap(&m, &f, 0.0).expect("the arm is in the chest");
+        assert!(o.away[1] > 0.99, "{o:?}");
     }
 
     #[test]
