@@ -33,28 +33,20 @@ fn joints(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
 fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     let dir = tempfile::tempdir().unwrap();
     let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    ok(&dancegen(&[
-        "-q",
-        "convert",
-        &leader_bvh(),
-        "--to",
-        "smpl24",
-        "--fps",
-        "30",
-        "-o",
-        &out("leader.npy"),
-    ]));
-    ok(&dancegen(&[
-        "-q",
-        "convert",
-        &leader_bvh(),
-        "--to",
-        "smpl24",
-        "--fps",
-        "30",
-        "-o",
-        &out("leader.npz"),
-    ]));
+    // The leader as the CLI reads it: world joints (.npy) and SMPL motion (.npz).
+    for name in ["leader.npy", "leader.npz"] {
+        ok(&dancegen(&[
+            "-q",
+            "convert",
+            &leader_bvh(),
+            "--to",
+            "smpl24",
+            "--fps",
+            "30",
+            "-o",
+            &out(name),
+        ]));
+    }
     let o = dancegen(&[
         "-q",
         "generate",
@@ -92,8 +84,11 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     };
     let gap = pelvis_gap(&f, &l);
     assert!(gap < 1.5, "mean pelvis distance {gap} m");
-    // The separation takes the follower out of the leader's body: fewer frames with trunks,
-    // heads, arms or legs overlapping than the model's raw placement (`--no-separation`).
+    // The separation takes the follower out of the leader's body: far fewer frames with
+    // trunks, heads, arms or legs overlapping than the model's raw placement
+    // (`--no-separation`). With the shipped model and this leader: 61 raw, 14 separated, of
+    // 568 (it reduces brief overlaps rather than removing them); "at most half" leaves room
+    // for another build's rounding.
     ok(&dancegen(&[
         "-q",
         "generate",
@@ -116,7 +111,7 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     };
     let (sep_n, raw_n) = (overlapping(&f), overlapping(&raw));
     assert!(
-        sep_n <= raw_n && (raw_n == 0 || sep_n < raw_n),
+        raw_n > 0 && 2 * sep_n <= raw_n,
         "overlapping frames: {sep_n} separated, {raw_n} raw, of {t}"
     );
     // The same leader 5 m further along x: the same follower (same seed), 5 m further.
