@@ -38,12 +38,7 @@ echo "load before: $(uptime)" >&2
 
 if [ "${DUET_SKIP_DENOISER:-0}" != 1 ]; then
   bin=$(bench_binary dancegen-reactdance blc_sampling "$py")
-  for r in $(seq "$rounds"); do
-    echo "round $r/$rounds: burn-flex" >&2
-    RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"
-    echo "round $r/$rounds: pytorch" >&2
-    OMP_NUM_THREADS=$threads MKL_NUM_THREADS=$threads "$py" "$here/duet_denoiser.py" $case >> "$out"
-  done
+  interleaved_rounds "$rounds" "$threads" "$bin" "$py" "$here/duet_denoiser.py" "$case" "$out"
 fi
 
 if [ "${DUET_SKIP_E2E:-0}" != 1 ] && [[ "e2e_${frames}f_duet" == *"$case"* ]]; then

@@ -59,7 +59,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from torch_blocks import LN_EPS, Attention, EncoderLayer, Film, Mlp  # noqa: E402
+from torch_blocks import LN_EPS, EncoderLayer, FilmDecoderLayer  # noqa: E402
 
 # DuetFollower::STREAMS / DIMS, DuetLeader::DIMS (crates/dancegen-motion/src/repr/duet.rs), MUSIC_DIMS.
 STREAMS = [(0, 90), (90, 142), (142, 151)]
@@ -111,24 +111,6 @@ def sinusoidal_timestep(t, d):
     return torch.cat([a.sin(), a.cos()], -1).float()
 
 
-class FilmDecoderLayer(nn.Module):
-    """transformer::FilmDecoderLayer (norm-first), no rotary."""
-
-    def __init__(self, d, h, ff):
-        super().__init__()
-        self.self_attn, self.cross_attn, self.ff = Attention(d, h), Attention(d, h), Mlp(d, ff)
-        self.norm1 = nn.LayerNorm(d, eps=LN_EPS)
-        self.norm2 = nn.LayerNorm(d, eps=LN_EPS)
-        self.norm3 = nn.LayerNorm(d, eps=LN_EPS)
-        self.film1, self.film2, self.film3 = Film(d), Film(d), Film(d)
-
-    def forward(self, x, cond, kv, causal):
-        h = self.norm1(x)
-        x = x + self.film1(self.self_attn(h, h, h, causal=causal), cond)
-        x = x + self.film2(self.cross_attn(self.norm2(x), kv=kv), cond)
-        return x + self.film3(self.ff(self.norm3(x)), cond)
-
-
 class LatentDenoiser(nn.Module):
     def __init__(self):
         super().__init__()
@@ -173,7 +155,7 @@ class LatentDenoiser(nn.Module):
         cond = film + time
         h = self.input(x_t) + self.pos[:n]
         for l, lkv in zip(self.layers, kv):
-            h = l(h, cond, lkv, self.causal)
+            h = l(h, cond, kv=lkv, causal=self.causal)
         return self.output(h)
 
 

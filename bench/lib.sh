@@ -27,3 +27,18 @@ for line in sys.stdin:
     if m.get("reason") == "compiler-artifact" and m["target"]["name"] == sys.argv[1] and m.get("executable"):
         print(m["executable"])' "$bench"
 }
+
+# Runs the burn-flex bench binary $3 and the PyTorch port $5 (run by Python $4) alternately, $1
+# rounds with $2 threads each, both given the case filter $6 (may be empty), appending their
+# JSON lines to $7: interleaving spreads any drift in the machine's speed over both sides.
+interleaved_rounds() {
+  local rounds=$1 threads=$2 bin=$3 py=$4 port=$5 case=$6 out=$7 r
+  for r in $(seq "$rounds"); do
+    echo "round $r/$rounds: burn-flex" >&2
+    # shellcheck disable=SC2086  # an empty case filter is no argument
+    RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"
+    echo "round $r/$rounds: pytorch" >&2
+    # shellcheck disable=SC2086
+    OMP_NUM_THREADS=$threads MKL_NUM_THREADS=$threads "$py" "$port" $case >> "$out"
+  done
+}

@@ -17,11 +17,7 @@ py=$(torch_python "$venv" safetensors)
 bin=$(bench_binary dancegen-nn denoiser "$py")
 out=$(mktemp)
 threads=$(nproc)
-for r in $(seq "$rounds"); do
-  echo "round $r/$rounds" >&2
-  RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"
-  OMP_NUM_THREADS=$threads "$py" "$here/nn_denoiser.py" $case >> "$out"
-done
+interleaved_rounds "$rounds" "$threads" "$bin" "$py" "$here/nn_denoiser.py" "$case" "$out"
 "$py" - "$out" <<'PY'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]

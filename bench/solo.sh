@@ -31,12 +31,7 @@ echo "load before: $(uptime)" >&2
 
 if [ "${SOLO_SKIP_DENOISER:-0}" != 1 ]; then
   bin=$(bench_binary dancegen-lodgepp pddm_sampling "$py")
-  for r in $(seq "$rounds"); do
-    echo "round $r/$rounds: burn-flex" >&2
-    RAYON_NUM_THREADS=$threads "$bin" $case >> "$out"
-    echo "round $r/$rounds: pytorch" >&2
-    OMP_NUM_THREADS=$threads MKL_NUM_THREADS=$threads "$py" "$here/solo_pddm.py" $case >> "$out"
-  done
+  interleaved_rounds "$rounds" "$threads" "$bin" "$py" "$here/solo_pddm.py" "$case" "$out"
 fi
 
 if [ "${SOLO_SKIP_E2E:-0}" != 1 ]; then

@@ -50,7 +50,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from torch_blocks import LN_EPS, Attention, EncoderLayer, Film, Mlp  # noqa: E402
+from torch_blocks import EncoderLayer, FilmDecoderLayer, rotary_tables  # noqa: E402
 
 D_MOTION, MUSIC_DIMS, FOOT_FEATURES = 151, 35, 32
 # Sizes from the shipped config's [model.pddm] (the Rust bench reads the same file); the
@@ -120,41 +120,6 @@ def timestep_embedding(t, d):
     return torch.cat([e.sin(), e.cos()], -1).float()
 
 
-def rotary_tables(t, d, theta=10000.0):
-    """(cos, sin) [1, T, d], each frequency repeated for the interleaved pair (2i, 2i + 1)."""
-    f = theta ** (-(2.0 * torch.arange(d // 2, dtype=torch.float64)) / d)
-    a = torch.arange(t, dtype=torch.float64)[:, None] * f[None]
-    a = a.repeat_interleave(2, dim=1)
-    return a.cos().float()[None], a.sin().float()[None]
-
-
-def rotate(x, tables):
-    cos, sin = tables
-    b, t, d = x.shape
-    pairs = x.reshape(b, t, d // 2, 2)
-    half = torch.stack([-pairs[..., 1], pairs[..., 0]], -1).reshape(b, t, d)
-    return x * cos + half * sin
-
-
-class FilmDecoderLayer(nn.Module):
-    """Norm-first; rotary on the self-attention q/k input when tables are given."""
-
-    def __init__(self, d, h, ff):
-        super().__init__()
-        self.self_attn, self.cross_attn, self.ff = Attention(d, h), Attention(d, h), Mlp(d, ff)
-        self.norm1 = nn.LayerNorm(d, eps=LN_EPS)
-        self.norm2 = nn.LayerNorm(d, eps=LN_EPS)
-        self.norm3 = nn.LayerNorm(d, eps=LN_EPS)
-        self.film1, self.film2, self.film3 = Film(d), Film(d), Film(d)
-
-    def forward(self, x, memory, cond, rotary, kv=None):
-        h = self.norm1(x)
-        qk = rotate(h, rotary) if rotary is not None else h
-        x = x + self.film1(self.self_attn(qk, qk, h), cond)
-        x = x + self.film2(self.cross_attn(self.norm2(x), memory, memory, kv), cond)
-        return x + self.film3(self.ff(self.norm3(x)), cond)
-
-
 def rot6d_to_matrix(d6):
     """[N, 6] -> [N, 3, 3], rows b1, b2, b3 (Gram-Schmidt), as dancegen_nn::loss."""
     b1 = F.normalize(d6[:, :3], dim=1, eps=1e-12)
@@ -204,7 +169,7 @@ class FootRefine(nn.Module):
 
     def forward(self, h, x0_main, cond, scale, shift):
         tokens = self.features(self.foot_features(x0_main * scale + shift))
-        return self.output(self.layer(h, tokens, cond, None))
+        return self.output(self.layer(h, cond, memory=tokens))
 
 
 class PddmDenoiser(nn.Module):
@@ -252,7 +217,7 @@ class PddmDenoiser(nn.Module):
         rotary = (self.rot_cos[:, :frames], self.rot_sin[:, :frames])
         h = self.input(torch.cat([x_t, prims, mask], 2))
         for l, lkv in zip(self.layers, kv):
-            h = l(h, memory, film, rotary, lkv)
+            h = l(h, film, memory=memory, kv=lkv, rotary=rotary)
         main = self.output(h)
         return main + self.refine(h, main, film, self.scale, self.shift)
 

@@ -1,6 +1,7 @@
 """PyTorch twins of the dancegen-nn blocks the bench ports share (attention, feed-forward, FiLM,
-post-norm encoder layer), with dancegen-nn's parameter names so the same weights load."""
+post-norm encoder layer, FiLM decoder layer, rotary tables), with dancegen-nn's parameter names so the same weights load."""
 
+import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
@@ -63,3 +64,40 @@ class EncoderLayer(nn.Module):
     def forward(self, x):
         x = self.norm1(x + self.self_attn(x, x, x))
         return self.norm2(x + self.ff(x))
+
+
+def rotary_tables(t, d, theta=10000.0):
+    """(cos, sin) [1, T, d], each frequency repeated for the interleaved pair (2i, 2i + 1)."""
+    f = theta ** (-(2.0 * torch.arange(d // 2, dtype=torch.float64)) / d)
+    a = torch.arange(t, dtype=torch.float64)[:, None] * f[None]
+    a = a.repeat_interleave(2, dim=1)
+    return a.cos().float()[None], a.sin().float()[None]
+
+
+def rotate(x, tables):
+    cos, sin = tables
+    b, t, d = x.shape
+    pairs = x.reshape(b, t, d // 2, 2)
+    half = torch.stack([-pairs[..., 1], pairs[..., 0]], -1).reshape(b, t, d)
+    return x * cos + half * sin
+
+
+class FilmDecoderLayer(nn.Module):
+    """transformer::FilmDecoderLayer: norm-first, FiLM after each sub-layer; rotary on the
+    self-attention q/k input when tables are given (Lodge++), within-block causal on request."""
+
+    def __init__(self, d, h, ff):
+        super().__init__()
+        self.self_attn, self.cross_attn, self.ff = Attention(d, h), Attention(d, h), Mlp(d, ff)
+        self.norm1 = nn.LayerNorm(d, eps=LN_EPS)
+        self.norm2 = nn.LayerNorm(d, eps=LN_EPS)
+        self.norm3 = nn.LayerNorm(d, eps=LN_EPS)
+        self.film1, self.film2, self.film3 = Film(d), Film(d), Film(d)
+
+    def forward(self, x, cond, memory=None, kv=None, rotary=None, causal=False):
+        """Cross-attends `memory`, or its precomputed key/value heads `kv`."""
+        h = self.norm1(x)
+        qk = rotate(h, rotary) if rotary is not None else h
+        x = x + self.film1(self.self_attn(qk, qk, h, causal=causal), cond)
+        x = x + self.film2(self.cross_attn(self.norm2(x), memory, memory, kv), cond)
+        return x + self.film3(self.ff(self.norm3(x)), cond)
