@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use crate::manifest::{ClipEntry, WarpReport};
 use crate::{
     BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs,
-    check_hold_out, create_dirs, stem, write_couple_clip,
+    check_hold_out, create_dirs, gather_clips, stem, write_couple_clip,
 };
 
 /// Values per frame of a rotmat file.
@@ -212,11 +212,7 @@ pub(crate) fn build_dd100(
             .map(Some)
         })
         .collect();
-    let mut clips = Vec::new();
-    for r in results {
-        clips.extend(r?);
-    }
-    Ok(clips)
+    gather_clips(results)
 }
 
 #[cfg(test)]

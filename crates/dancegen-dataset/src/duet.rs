@@ -22,8 +22,8 @@ use crate::manifest::{ClipEntry, WarpReport};
 use crate::warp::warp_motion;
 use crate::{
     BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs, bas_bailando,
-    best_song, check_hold_out, create_dirs, expand_motion_inputs, genre, load_units, stem,
-    world_joints, write_couple_clip,
+    best_song, check_hold_out, create_dirs, expand_motion_inputs, gather_clips, genre, load_units,
+    stem, world_joints, write_couple_clip,
 };
 
 /// Two dancers recorded together.
@@ -152,11 +152,7 @@ pub(crate) fn build_duet(
             r
         })
         .collect();
-    let mut clips = Vec::new();
-    for r in results {
-        clips.extend(r?);
-    }
-    Ok(clips)
+    gather_clips(results)
 }
 
 fn pair_couple(

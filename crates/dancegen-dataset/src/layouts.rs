@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::{
     BuildOptions, ClipEntry, DatasetError, Pairing, Progress, analyse_songs, check_hold_out,
-    create_dirs, genre, load_units, original_clip, stem, write_clip,
+    create_dirs, gather_clips, genre, load_units, original_clip, stem, write_clip,
 };
 
 /// FineDance's test split (`li-ronghui/LODGE:infer_lodge.py`; anchors.md C.3).
@@ -267,11 +267,7 @@ pub(crate) fn build_layout(
             Ok(out)
         })
         .collect();
-    let mut clips = Vec::new();
-    for r in results {
-        clips.extend(r?);
-    }
-    Ok(clips)
+    gather_clips(results)
 }
 
 #[cfg(test)]

@@ -217,6 +217,18 @@ pub fn bas_bailando(joints: &[f64], music_beats: &[usize]) -> Option<f64> {
     beat_align_score(&music, &motion, Variant::Bailando)
 }
 
+/// The clips of parallel jobs in job order, or the error of the first failing job in job order
+/// (so the message does not depend on which thread finished first).
+pub(crate) fn gather_clips<C: IntoIterator<Item = ClipEntry>>(
+    results: Vec<Result<C, DatasetError>>,
+) -> Result<Vec<ClipEntry>, DatasetError> {
+    let mut clips = Vec::new();
+    for r in results {
+        clips.extend(r?);
+    }
+    Ok(clips)
+}
+
 pub(crate) fn world_joints(m: &SmplMotion, source: &Path) -> Result<Vec<f64>, DatasetError> {
     let j = m
         .joints_world()
@@ -585,10 +597,7 @@ fn build_pseudo(
             Ok(entries)
         })
         .collect();
-    let mut clips = Vec::new();
-    for r in results {
-        clips.extend(r?);
-    }
+    let clips = gather_clips(results)?;
     let mut names = BTreeSet::new();
     for c in &clips {
         if !names.insert(c.name.as_str()) {
