@@ -48,8 +48,8 @@ impl Default for SeparationConfig {
     /// 30 fps), short enough to follow a partner's step, long enough that a one-frame push
     /// becomes a sway; 12 rounds. Each round moves a brief overlap only by the kernel's share of
     /// its push, so an overlap of a few frames is reduced rather than removed: the rounds bound
-    /// how fast the follower may be moved. (Real salsa couples have such capsule overlaps too,
-    /// arms around the partner: 13–22 % of the frames of the held-out takes.)
+    /// how fast the follower may be moved. Real couples have brief capsule overlaps too (an arm
+    /// round the partner), so removing every one is not the aim.
     fn default() -> Self {
         Self {
             margin_m: 0.01,
@@ -333,7 +333,7 @@ mod tests {
     }
 
     #[test]
-    fn vertical_lines_fall_back_to_pelvis_then_x() {
+    fn coincident_bodies_push_along_x_and_near_ones_along_their_closest_points() {
         let mut a = frame_joints(&rest_at(0.0, 0.0, 1), 0);
         let b = a;
         // Identical bodies: the closest points coincide; pelvis to pelvis is zero too.
