@@ -87,7 +87,9 @@ pub fn capsule_normal(p: V3, a: V3, b: V3) -> V3 {
 }
 
 /// Distance in the floor plane (x, z) from point `p` to segment `a`–`b`, and the segment
-/// parameter of the nearest point.
+/// parameter of the nearest point. (The frame renderer runs the same arithmetic on blocks of
+/// primitives; this scalar form is the full-frame reference's.)
+#[cfg(test)]
 pub fn seg_dist_xz(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> (f32, f32) {
     let ba = [b[0] - a[0], b[1] - a[1]];
     let pa = [p[0] - a[0], p[1] - a[1]];

@@ -2,9 +2,10 @@
 
 use dancegen_motion::skeleton::Skeleton;
 
+#[cfg(test)]
+use crate::math::seg_dist_xz;
 use crate::math::{
-    V3, add, capsule_normal, cross, dot, normalize, ray_capsule, scale, seg_dist_xz, smoothstep,
-    sub,
+    V3, add, capsule_normal, cross, dot, normalize, ray_capsule, ray_sphere, scale, smoothstep, sub,
 };
 use crate::{FrameStream, RenderError, RgbImage};
 
@@ -120,6 +121,19 @@ pub struct Scene {
     background: Vec<V3>,
     /// Ray distance to the floor per supersampled pixel (infinite where the floor is not seen).
     floor_t: Vec<f32>,
+    /// Unit view ray per supersampled pixel, exactly [`Scene::ray`]: the figure and shadow
+    /// loops read it instead of normalising (a square root and a division) per pixel and
+    /// primitive.
+    rays: Vec<V3>,
+    /// World (x, z) where each supersampled pixel's ray meets the floor (meaningful where
+    /// `floor_t` is finite), computed as the shadow pass always did.
+    floor_xz: Vec<[f32; 2]>,
+    /// Per [`SHADOW_TILE`]² tile of the supersampled frame (row-major, tiles aligned to the
+    /// frame's top-left corner): the floor (x, z) box its floor pixels see, `None` if none.
+    tile_floor: Vec<Option<[[f32; 2]; 2]>>,
+    /// The background downsampled to the output size: a frame starts from a copy of it and
+    /// only the rectangle the dancers and their shadows can touch is rendered again.
+    background_image: RgbImage,
     duration: f32,
 }
 
@@ -259,6 +273,14 @@ impl Scene {
             sh,
             background: Vec::new(),
             floor_t: Vec::new(),
+            rays: Vec::new(),
+            floor_xz: Vec::new(),
+            tile_floor: Vec::new(),
+            background_image: RgbImage {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            },
             duration: 0.0,
         };
         scene.duration = scene
@@ -328,12 +350,15 @@ impl Scene {
         let n = self.sw * self.sh;
         let mut bg = vec![[0.0; 3]; n];
         let mut ft = vec![f32::INFINITY; n];
+        let mut rays = vec![[0.0; 3]; n];
+        let mut fxz = vec![[0.0; 2]; n];
         for py in 0..self.sh {
             let v = py as f32 / (self.sh - 1).max(1) as f32;
             let sky = add(SKY_TOP, scale(sub(SKY_BOTTOM, SKY_TOP), v));
             for px in 0..self.sw {
                 let i = py * self.sw + px;
                 let d = self.ray(px, py);
+                rays[i] = d;
                 bg[i] = sky;
                 if d[1] >= -1e-6 {
                     continue;
@@ -353,6 +378,7 @@ impl Scene {
                     continue;
                 }
                 ft[i] = t;
+                fxz[i] = [x, z];
                 // World size of one pixel on the floor.
                 let foot = t / self.focal / (-d[1]).max(0.08);
                 let mut line = 0.0f32;
@@ -369,12 +395,370 @@ impl Scene {
                 bg[i] = add(sky, scale(sub(floor, sky), alpha));
             }
         }
+        self.background_image = self.downsample(&bg);
         self.background = bg;
         self.floor_t = ft;
+        self.rays = rays;
+        self.floor_xz = fxz;
+        self.tile_floor = self.tile_floor_boxes();
+    }
+
+    /// The floor box of every shadow tile (see `tile_floor`).
+    fn tile_floor_boxes(&self) -> Vec<Option<[[f32; 2]; 2]>> {
+        let (tw, th) = (self.sw.div_ceil(SHADOW_TILE), self.sh.div_ceil(SHADOW_TILE));
+        let mut out = vec![None; tw * th];
+        for py in 0..self.sh {
+            for px in 0..self.sw {
+                let i = py * self.sw + px;
+                if !self.floor_t[i].is_finite() {
+                    continue;
+                }
+                let q = self.floor_xz[i];
+                let b = out[(py / SHADOW_TILE) * tw + px / SHADOW_TILE].get_or_insert([q, q]);
+                for k in 0..2 {
+                    b[0][k] = b[0][k].min(q[k]);
+                    b[1][k] = b[1][k].max(q[k]);
+                }
+            }
+        }
+        out
     }
 
     /// Renders the scene at time `t` seconds.
+    ///
+    /// The frame is the precomputed downsampled background with only the rectangle that the
+    /// figures and their shadows can touch rendered again (at the supersampled resolution,
+    /// aligned to whole output pixels). Inside it the arithmetic is the same as drawing the
+    /// whole frame, so the pixels are identical; the savings come from skipping work that
+    /// cannot change a pixel:
+    /// - the view rays and floor points come from per-pixel tables built with the background;
+    /// - a primitive tests only the pixels of each box row that lie near its projected 2D
+    ///   segment (a bound that over-covers the projected capsule, see [`StadiumSpan`]);
+    /// - a shadow tile only visits the shadow primitives whose reach overlaps the tile's
+    ///   floor area.
     pub fn render_at(&self, t: f32) -> RgbImage {
+        let poses: Vec<Vec<V3>> = self.figures.iter().map(|f| f.track.pose_at(t)).collect();
+        let mut prims = Vec::new();
+        for (fig, pose) in self.figures.iter().zip(&poses) {
+            let r = fig.radius;
+            for (j, p) in fig.track.parents.iter().enumerate() {
+                if let Some(p) = *p {
+                    prims.extend(self.screen_prim(pose[p], pose[j], r, fig.colour));
+                }
+                let rs = if Some(j) == fig.head {
+                    r * 2.1
+                } else if fig.has_bones {
+                    r * 1.15
+                } else {
+                    r * 1.6
+                };
+                prims.extend(self.screen_prim(pose[j], pose[j], rs, fig.colour));
+            }
+        }
+        let shadow = if self.opts.shadows {
+            self.shadow_setup(&poses)
+        } else {
+            None
+        };
+        // The dirty rectangle: union of every box that can be written, widened to whole
+        // output pixels so the downsampling reads only rendered samples.
+        let (mut x0, mut y0, mut x1, mut y1) = (self.sw, self.sh, 0, 0);
+        let boxes = prims
+            .iter()
+            .map(|p| p.bbox)
+            .chain(shadow.as_ref().map(|s| s.bbox));
+        for [bx0, by0, bx1, by1] in boxes {
+            if bx0 < bx1 && by0 < by1 {
+                x0 = x0.min(bx0);
+                y0 = y0.min(by0);
+                x1 = x1.max(bx1);
+                y1 = y1.max(by1);
+            }
+        }
+        let mut img = self.background_image.clone();
+        if x0 >= x1 || y0 >= y1 {
+            return img;
+        }
+        let ss = self.ss();
+        let rect = Rect {
+            x0: x0 / ss * ss,
+            y0: y0 / ss * ss,
+            x1: x1.div_ceil(ss) * ss,
+            y1: y1.div_ceil(ss) * ss,
+        };
+        let w = rect.x1 - rect.x0;
+        let mut col = Vec::with_capacity(w * (rect.y1 - rect.y0));
+        let mut depth = Vec::with_capacity(col.capacity());
+        for y in rect.y0..rect.y1 {
+            let row = y * self.sw;
+            col.extend_from_slice(&self.background[row + rect.x0..row + rect.x1]);
+            depth.extend_from_slice(&self.floor_t[row + rect.x0..row + rect.x1]);
+        }
+        if let Some(sh) = &shadow {
+            self.draw_shadows_fast(sh, &rect, &mut col);
+        }
+        let light = normalize([0.45, 0.85, 0.55]);
+        for p in &prims {
+            self.draw_prim(p, light, &rect, &mut col, &mut depth);
+        }
+        self.downsample_rect(&col, &rect, &mut img);
+        img
+    }
+
+    fn ss(&self) -> usize {
+        self.opts.supersample.clamp(1, 4) as usize
+    }
+
+    /// Screen-space data of one capsule (a sphere when `a == b`), or `None` when it reaches
+    /// behind the camera (never drawn, as before).
+    fn screen_prim(&self, a: V3, b: V3, r: f32, colour: V3) -> Option<ScreenPrim> {
+        let (za, xa, ya) = self.project(a);
+        let (zb, xb, yb) = self.project(b);
+        let zmin = za.min(zb) - r;
+        if zmin <= 1e-4 {
+            return None;
+        }
+        let pr = r * self.focal / zmin + 2.0;
+        let bx0 = (xa.min(xb) - pr).floor().max(0.0) as usize;
+        let by0 = (ya.min(yb) - pr).floor().max(0.0) as usize;
+        let bx1 = ((xa.max(xb) + pr).ceil().max(0.0) as usize).min(self.sw);
+        let by1 = ((ya.max(yb) + pr).ceil().max(0.0) as usize).min(self.sh);
+        // Off-axis, perspective stretches a sphere's image by up to sqrt(1 + tan²θ) beyond
+        // r·focal/z, θ the angle between the axis and the sphere centre; the angle is largest
+        // at an end of the segment.
+        let (cx, cy) = (self.sw as f64 * 0.5, self.sh as f64 * 0.5);
+        let off = |x: f32, y: f32| (x as f64 - cx).hypot(y as f64 - cy) / self.focal as f64;
+        let tan = off(xa, ya).max(off(xb, yb));
+        let reach = r as f64 * self.focal as f64 / zmin as f64 * (1.0 + tan * tan).sqrt();
+        Some(ScreenPrim {
+            a,
+            b,
+            r,
+            colour,
+            bbox: [bx0, by0, bx1, by1],
+            span: StadiumSpan::new(
+                [xa as f64, ya as f64],
+                [xb as f64, yb as f64],
+                reach * SPAN_SLACK_REL + SPAN_SLACK_PX,
+            ),
+        })
+    }
+
+    /// [`Scene::draw_capsule`]'s pixel loop on the dirty rectangle, row by row over the part
+    /// of the box that [`StadiumSpan`] leaves.
+    fn draw_prim(&self, p: &ScreenPrim, light: V3, rect: &Rect, col: &mut [V3], depth: &mut [f32]) {
+        let [bx0, by0, bx1, by1] = p.bbox;
+        let (a, b, r, colour) = (p.a, p.b, p.r, p.colour);
+        let sphere = a == b;
+        let w = rect.x1 - rect.x0;
+        for py in by0..by1 {
+            let Some((sx0, sx1)) = p.span.row(py as f64 + 0.5) else {
+                continue;
+            };
+            let px0 = bx0.max(sx0);
+            let px1 = bx1.min(sx1);
+            let ray_row = py * self.sw;
+            let buf_row = (py - rect.y0) * w;
+            for px in px0..px1 {
+                let d = self.rays[ray_row + px];
+                // With `a == b`, `ray_capsule` ends in `ray_sphere(a).min(ray_sphere(a))`.
+                let hit_t = if sphere {
+                    ray_sphere(self.cam, d, a, r)
+                } else {
+                    ray_capsule(self.cam, d, a, b, r)
+                };
+                let Some(t) = hit_t else {
+                    continue;
+                };
+                let i = buf_row + px - rect.x0;
+                if t >= depth[i] {
+                    continue;
+                }
+                depth[i] = t;
+                col[i] = shade(self.cam, d, t, a, b, colour, light);
+            }
+        }
+    }
+
+    /// The shadow primitives of a frame and the supersampled box they can darken, exactly as
+    /// the full-frame pass computes them (`None`: no finite shadow).
+    fn shadow_setup(&self, poses: &[Vec<V3>]) -> Option<Shadows> {
+        let mut prims: Vec<ShadowPrim> = Vec::new();
+        for (fig, pose) in self.figures.iter().zip(poses) {
+            let r = fig.radius;
+            for (j, p) in fig.track.parents.iter().enumerate() {
+                let (a, b, rr) = match *p {
+                    Some(p) => (pose[p], pose[j], r * 1.3),
+                    None => (pose[j], pose[j], r * 1.8),
+                };
+                let h = ((a[1] + b[1]) * 0.5 - self.floor_y).max(0.0);
+                let soft = rr + h * 0.25;
+                prims.push(ShadowPrim {
+                    a: [a[0], a[2]],
+                    b: [b[0], b[2]],
+                    soft,
+                    inner: rr * 0.3,
+                    outer: soft * 1.5,
+                    strength: (rr / soft).sqrt(),
+                });
+            }
+        }
+        let mut lo = [f32::INFINITY; 2];
+        let mut hi = [f32::NEG_INFINITY; 2];
+        for p in &prims {
+            for q in [p.a, p.b] {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(q[k] - p.soft * 1.5);
+                    hi[k] = hi[k].max(q[k] + p.soft * 1.5);
+                }
+            }
+        }
+        if !(lo[0].is_finite() && hi[0].is_finite()) {
+            return None;
+        }
+        let (mut bx0, mut by0, mut bx1, mut by1) = (
+            f32::INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NEG_INFINITY,
+        );
+        for (x, z) in [
+            (lo[0], lo[1]),
+            (lo[0], hi[1]),
+            (hi[0], lo[1]),
+            (hi[0], hi[1]),
+        ] {
+            let (zc, px, py) = self.project([x, self.floor_y, z]);
+            if zc <= 1e-4 {
+                // A corner behind the camera: shade the whole frame.
+                (bx0, by0, bx1, by1) = (0.0, 0.0, self.sw as f32, self.sh as f32);
+                break;
+            }
+            bx0 = bx0.min(px);
+            by0 = by0.min(py);
+            bx1 = bx1.max(px);
+            by1 = by1.max(py);
+        }
+        let bbox = [
+            bx0.floor().max(0.0) as usize,
+            by0.floor().max(0.0) as usize,
+            (bx1.ceil().max(0.0) as usize).min(self.sw),
+            (by1.ceil().max(0.0) as usize).min(self.sh),
+        ];
+        Some(Shadows {
+            prims,
+            lo,
+            hi,
+            bbox,
+        })
+    }
+
+    /// The shadow pass over [`SHADOW_TILE`]-sized tiles of the shadow box: each tile keeps
+    /// the primitives whose reach (`outer`, with a safety margin) overlaps the floor area its
+    /// pixels see; the others would fail `dist < outer` at every pixel of the tile. The
+    /// darkening is the maximum over primitives, so leaving out ones that add nothing does
+    /// not change it.
+    fn draw_shadows_fast(&self, sh: &Shadows, rect: &Rect, col: &mut [V3]) {
+        let [bx0, by0, bx1, by1] = sh.bbox;
+        let (lo, hi) = (sh.lo, sh.hi);
+        let w = rect.x1 - rect.x0;
+        let mut lanes: Vec<ShadowLanes> = Vec::with_capacity(sh.prims.len().div_ceil(LANES));
+        let tiles_x = self.sw.div_ceil(SHADOW_TILE);
+        for ty in by0 / SHADOW_TILE..by1.div_ceil(SHADOW_TILE) {
+            let (py0, py1) = (
+                (ty * SHADOW_TILE).max(by0),
+                ((ty + 1) * SHADOW_TILE).min(by1),
+            );
+            for tx in bx0 / SHADOW_TILE..bx1.div_ceil(SHADOW_TILE) {
+                let (px0, px1) = (
+                    (tx * SHADOW_TILE).max(bx0),
+                    ((tx + 1) * SHADOW_TILE).min(bx1),
+                );
+                let Some([tlo, thi]) = self.tile_floor[ty * tiles_x + tx] else {
+                    continue;
+                };
+                lanes.clear();
+                let mut block = ShadowLanes::EMPTY;
+                let mut n = 0;
+                for p in &sh.prims {
+                    let m = p.outer * (1.0 + SHADOW_CULL_REL) + SHADOW_CULL_ABS;
+                    let near = (0..2).all(|k| {
+                        p.a[k].min(p.b[k]) - m <= thi[k] && p.a[k].max(p.b[k]) + m >= tlo[k]
+                    });
+                    if !near {
+                        continue;
+                    }
+                    block.set(n, p);
+                    n += 1;
+                    if n == LANES {
+                        lanes.push(block);
+                        block = ShadowLanes::EMPTY;
+                        n = 0;
+                    }
+                }
+                if n > 0 {
+                    lanes.push(block);
+                }
+                if lanes.is_empty() {
+                    continue;
+                }
+                for py in py0..py1 {
+                    for px in px0..px1 {
+                        let i = py * self.sw + px;
+                        if !self.floor_t[i].is_finite() {
+                            continue;
+                        }
+                        let q = self.floor_xz[i];
+                        if q[0] < lo[0] || q[0] > hi[0] || q[1] < lo[1] || q[1] > hi[1] {
+                            continue;
+                        }
+                        let mut occ = 0.0f32;
+                        for l in &lanes {
+                            // Every value is finite and ≥ 0: a plain comparison is `f32::max`.
+                            let o = l.occlusion(q);
+                            if o > occ {
+                                occ = o;
+                            }
+                        }
+                        if occ > 0.0 {
+                            let c = &mut col[(py - rect.y0) * w + px - rect.x0];
+                            *c = scale(*c, 1.0 - 0.45 * occ);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Scene::downsample`] of the dirty rectangle into `img` (the rest of `img` already is
+    /// the downsampled background).
+    fn downsample_rect(&self, col: &[V3], rect: &Rect, img: &mut RgbImage) {
+        let ss = self.ss();
+        let w = self.opts.width as usize;
+        let bw = rect.x1 - rect.x0;
+        let norm = 1.0 / (ss * ss) as f32;
+        for y in rect.y0 / ss..rect.y1 / ss {
+            for x in rect.x0 / ss..rect.x1 / ss {
+                let mut acc = [0.0f32; 3];
+                for dy in 0..ss {
+                    let row = (y * ss + dy - rect.y0) * bw + x * ss - rect.x0;
+                    for c in &col[row..row + ss] {
+                        acc = add(acc, *c);
+                    }
+                }
+                let o = (y * w + x) * 3;
+                for k in 0..3 {
+                    img.data[o + k] = (acc[k] * norm * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+    }
+
+    /// The renderer as it was before [`Scene::render_at`] learned to draw only the changed
+    /// rectangle: the whole supersampled frame, every pixel of every primitive's box, every
+    /// shadow primitive per floor pixel. Kept for the tests, which require identical frames.
+    #[cfg(test)]
+    pub(crate) fn render_full_at(&self, t: f32) -> RgbImage {
         let mut col = self.background.clone();
         let mut depth = self.floor_t.clone();
         let poses: Vec<Vec<V3>> = self.figures.iter().map(|f| f.track.pose_at(t)).collect();
@@ -403,6 +787,7 @@ impl Scene {
         self.downsample(&col)
     }
 
+    #[cfg(test)]
     #[allow(clippy::too_many_arguments)]
     fn draw_capsule(
         &self,
@@ -436,22 +821,12 @@ impl Scene {
                     continue;
                 }
                 depth[i] = t;
-                let hit = add(self.cam, scale(d, t));
-                let n = capsule_normal(hit, a, b);
-                let diff = dot(n, light).max(0.0);
-                let hemi = 0.5 + 0.5 * n[1];
-                // A little rim light against the view direction separates overlapping limbs.
-                let rim = (1.0 + dot(n, d)).clamp(0.0, 1.0).powi(3) * 0.15;
-                let k = 0.22 + 0.2 * hemi + 0.62 * diff;
-                col[i] = [
-                    (colour[0] * k + rim).min(1.0),
-                    (colour[1] * k + rim).min(1.0),
-                    (colour[2] * k + rim).min(1.0),
-                ];
+                col[i] = shade(self.cam, d, t, a, b, colour, light);
             }
         }
     }
 
+    #[cfg(test)]
     fn draw_shadows(&self, poses: &[Vec<V3>], col: &mut [V3]) {
         // Shadow primitives: (xz segment, radius, softness).
         let mut prims: Vec<([f32; 2], [f32; 2], f32, f32)> = Vec::new();
@@ -559,6 +934,237 @@ impl Scene {
             data,
         }
     }
+}
+
+/// Lambert shading plus a sky/ground ambient term and a rim light, at the hit `cam + t d` of a
+/// capsule `a`–`b`.
+fn shade(cam: V3, d: V3, t: f32, a: V3, b: V3, colour: V3, light: V3) -> V3 {
+    let hit = add(cam, scale(d, t));
+    let n = capsule_normal(hit, a, b);
+    let diff = dot(n, light).max(0.0);
+    let hemi = 0.5 + 0.5 * n[1];
+    // A little rim light against the view direction separates overlapping limbs.
+    let rim = (1.0 + dot(n, d)).clamp(0.0, 1.0).powi(3) * 0.15;
+    let k = 0.22 + 0.2 * hemi + 0.62 * diff;
+    [
+        (colour[0] * k + rim).min(1.0),
+        (colour[1] * k + rim).min(1.0),
+        (colour[2] * k + rim).min(1.0),
+    ]
+}
+
+/// Side of the square tiles (supersampled pixels) over which shadow primitives are culled:
+/// small enough that a tile sees only a few of a figure's bones, large enough that the cull
+/// costs little next to the pixels.
+const SHADOW_TILE: usize = 16;
+/// Safety margin of the shadow cull, relative to a primitive's reach and absolute (world
+/// units): the cull compares boxes in exact terms while the per-pixel distance is rounded,
+/// so a primitive is only left out when it is clearly too far.
+const SHADOW_CULL_REL: f32 = 1e-3;
+const SHADOW_CULL_ABS: f32 = 1e-5;
+/// Widening of a primitive's 2D reach (relative, then in supersampled pixels) so that the row
+/// spans cover every pixel the exact ray test can hit, rounding of that f32 test included
+/// (its error is well under 1 % of the radius).
+const SPAN_SLACK_REL: f64 = 1.05;
+const SPAN_SLACK_PX: f64 = 2.0;
+
+/// A rectangle of supersampled pixels, `x0..x1` × `y0..y1`.
+struct Rect {
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+}
+
+/// One capsule of a frame, ready to draw.
+struct ScreenPrim {
+    a: V3,
+    b: V3,
+    r: f32,
+    colour: V3,
+    /// `[x0, y0, x1, y1]`: the pixel box the full-frame renderer tests (it may be empty).
+    bbox: [usize; 4],
+    span: StadiumSpan,
+}
+
+/// The pixels near a projected segment: every point within `reach` of the 2D segment `a`–`b`
+/// (a "stadium", convex, so each pixel row meets it in one interval).
+///
+/// A ray hits a capsule (radius r around segment AB, nearest depth `zmin` > 0) at a point
+/// h = c + v with c on AB and |v| ≤ r. Perspective maps AB onto the 2D segment between the
+/// projected ends, so P(c) lies on it, and |P(c + v) − P(c)| ≤ focal·r·sqrt(1 + |u|²)/z_h,
+/// where u = (c_x/c_z, c_y/c_z) (the norm of v ↦ (v_x − u_x v_z, v_y − u_y v_z) is
+/// sqrt(1 + |u|²)) and z_h ≥ zmin. So every hit pixel is within that reach of the 2D segment;
+/// |u| is largest at one of the ends. The reach is widened by [`SPAN_SLACK_REL`] and
+/// [`SPAN_SLACK_PX`] for rounding.
+struct StadiumSpan {
+    a: [f64; 2],
+    b: [f64; 2],
+    reach: f64,
+}
+
+impl StadiumSpan {
+    fn new(a: [f64; 2], b: [f64; 2], reach: f64) -> Self {
+        StadiumSpan { a, b, reach }
+    }
+
+    /// Pixel columns `x0..x1` whose centres lie within the reach on the row whose pixel
+    /// centres are at height `y` (with one pixel to spare each side), or `None`.
+    fn row(&self, y: f64) -> Option<(usize, usize)> {
+        let (a, b, r) = (self.a, self.b, self.reach);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        // The two end disks.
+        for c in [a, b] {
+            let dy = y - c[1];
+            if dy.abs() <= r {
+                let half = (r * r - dy * dy).max(0.0).sqrt();
+                lo = lo.min(c[0] - half);
+                hi = hi.max(c[0] + half);
+            }
+        }
+        // The band between them: 0 ≤ (p − a)·D ≤ |D|² and |D × (p − a)| ≤ r |D|, each
+        // linear in x on the row.
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let dd = d[0] * d[0] + d[1] * d[1];
+        if dd > 0.0 {
+            let dy = y - a[1];
+            // (x − a_x) D_x + dy D_y ∈ [0, dd]
+            let along = linear_range(d[0], dy * d[1], 0.0, dd);
+            // D_x dy − D_y (x − a_x) ∈ [−r|D|, r|D|]
+            let rl = r * dd.sqrt();
+            let across = linear_range(-d[1], d[0] * dy, -rl, rl);
+            if let (Some(p), Some(q)) = (along, across) {
+                let (l, h) = (p.0.max(q.0), p.1.min(q.1));
+                if l <= h {
+                    lo = lo.min(a[0] + l);
+                    hi = hi.max(a[0] + h);
+                }
+            }
+        }
+        if !(lo <= hi) {
+            return None;
+        }
+        // Pixel px has its centre at px + 0.5.
+        let x0 = (lo - 0.5 - 1.0).floor().max(0.0);
+        let x1 = (hi - 0.5 + 1.0).ceil() + 1.0;
+        if x1 <= x0 {
+            return None;
+        }
+        Some((x0 as usize, x1 as usize))
+    }
+}
+
+/// The offsets `s` with `k s + c ∈ [lo, hi]`: `Some((s0, s1))`, unbounded sides as
+/// infinities, `None` when no `s` qualifies.
+fn linear_range(k: f64, c: f64, lo: f64, hi: f64) -> Option<(f64, f64)> {
+    if k == 0.0 {
+        return (c >= lo && c <= hi).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let (s0, s1) = ((lo - c) / k, (hi - c) / k);
+    Some((s0.min(s1), s0.max(s1)))
+}
+
+/// One figure bone (or joint) as a floor shadow, with the values the pixel loop needs.
+struct ShadowPrim {
+    /// Floor-plane (x, z) ends.
+    a: [f32; 2],
+    b: [f32; 2],
+    soft: f32,
+    /// `rr * 0.3` and `soft * 1.5`: the smoothstep edges (full shadow inside, none beyond).
+    inner: f32,
+    outer: f32,
+    /// `sqrt(rr / soft)`: high bones cast fainter shadows.
+    strength: f32,
+}
+
+/// Shadow primitives per block of the per-pixel loop: the loop over a block's lanes has no
+/// branches, so the compiler runs it on SIMD registers (IEEE division and square root are
+/// correctly rounded there too, so each lane computes what the scalar code computes).
+const LANES: usize = 8;
+
+/// [`LANES`] shadow primitives, one array per quantity. Unused lanes have `outer` = 0, which
+/// `dist < outer` always rejects.
+#[derive(Clone, Copy)]
+struct ShadowLanes {
+    ax: [f32; LANES],
+    az: [f32; LANES],
+    /// `b − a`, and its squared length, as [`seg_dist_xz`] computes them.
+    bax: [f32; LANES],
+    baz: [f32; LANES],
+    bb: [f32; LANES],
+    inner: [f32; LANES],
+    outer: [f32; LANES],
+    /// `outer − inner`, the smoothstep's denominator.
+    width: [f32; LANES],
+    strength: [f32; LANES],
+}
+
+impl ShadowLanes {
+    const EMPTY: ShadowLanes = ShadowLanes {
+        ax: [0.0; LANES],
+        az: [0.0; LANES],
+        bax: [0.0; LANES],
+        baz: [0.0; LANES],
+        bb: [0.0; LANES],
+        inner: [0.0; LANES],
+        outer: [0.0; LANES],
+        width: [1.0; LANES],
+        strength: [0.0; LANES],
+    };
+
+    fn set(&mut self, k: usize, p: &ShadowPrim) {
+        let ba = [p.b[0] - p.a[0], p.b[1] - p.a[1]];
+        self.ax[k] = p.a[0];
+        self.az[k] = p.a[1];
+        self.bax[k] = ba[0];
+        self.baz[k] = ba[1];
+        self.bb[k] = ba[0] * ba[0] + ba[1] * ba[1];
+        self.inner[k] = p.inner;
+        self.outer[k] = p.outer;
+        self.width[k] = p.outer - p.inner;
+        self.strength[k] = p.strength;
+    }
+
+    /// The largest darkening of floor point `q` by these primitives: per lane exactly
+    /// `seg_dist_xz`, then `1 − smoothstep(inner, outer, dist)` times the strength where
+    /// `dist < outer`, else nothing.
+    fn occlusion(&self, q: [f32; 2]) -> f32 {
+        // Written as straight-line selects (both sides of every `if` are computed) so that
+        // the loop vectorises; the selected values are the scalar code's.
+        let mut v = [0.0f32; LANES];
+        for k in 0..LANES {
+            let pax = q[0] - self.ax[k];
+            let paz = q[1] - self.az[k];
+            let bb = self.bb[k];
+            let hq = (pax * self.bax[k] + paz * self.baz[k]) / bb;
+            let hc = hq.max(0.0).min(1.0);
+            let h = if bb > 0.0 { hc } else { 0.0 };
+            let dx = pax - self.bax[k] * h;
+            let dz = paz - self.baz[k] * h;
+            let dist = (dx * dx + dz * dz).sqrt();
+            let tq = (dist - self.inner[k]) / self.width[k];
+            let t = tq.max(0.0).min(1.0);
+            let s = 1.0 - t * t * (3.0 - 2.0 * t);
+            let c = s * self.strength[k];
+            v[k] = if dist < self.outer[k] { c } else { 0.0 };
+        }
+        // Finite and ≥ 0 (no NaN): plain comparisons give `f32::max`'s result.
+        let mut m = 0.0f32;
+        for x in v {
+            if x > m {
+                m = x;
+            }
+        }
+        m
+    }
+}
+
+/// The shadow primitives of one frame, their floor box and its supersampled pixel box.
+struct Shadows {
+    prims: Vec<ShadowPrim>,
+    lo: [f32; 2],
+    hi: [f32; 2],
+    bbox: [usize; 4],
 }
 
 /// 1, 2 or 5 times a power of ten, close to `x`.

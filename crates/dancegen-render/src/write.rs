@@ -57,20 +57,62 @@ const BAYER4: [[f32; 4]; 4] = [
 
 /// Palette indices for `img` (ordered 4×4 dithering onto [`gif_palette`]'s cube).
 pub fn quantize_gif(img: &RgbImage) -> Vec<u8> {
+    let lut = dither_lut();
+    let (w, h) = (img.width as usize, img.height as usize);
+    let mut out = Vec::with_capacity(w * h);
+    for (y, row) in img.data.chunks_exact(w * 3).take(h).enumerate() {
+        for (x, p) in row.chunks_exact(3).enumerate() {
+            let t = &lut[(y & 3) * 4 + (x & 3)];
+            out.push(t[0][p[0] as usize] + t[1][p[1] as usize] + t[2][p[2] as usize]);
+        }
+    }
+    out
+}
+
+/// Per Bayer cell and channel, what each 8-bit value adds to the palette index (red level
+/// × 42, green level × 6, blue level), evaluated once with the dithering formula, so that
+/// quantising a pixel is three table reads instead of three float roundings.
+type DitherLut = [[[u8; 256]; 3]; 16];
+
+fn dither_lut() -> &'static DitherLut {
+    static LUT: std::sync::OnceLock<Box<DitherLut>> = std::sync::OnceLock::new();
+    LUT.get_or_init(|| {
+        let mut lut = Box::new([[[0u8; 256]; 3]; 16]);
+        for (cell, t) in lut.iter_mut().enumerate() {
+            let th = (BAYER4[cell / 4][cell % 4] + 0.5) / 16.0 - 0.5;
+            for v in 0..256usize {
+                for (c, (levels, weight)) in [(6.0f32, 42u32), (7.0, 6), (6.0, 1)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    t[c][v] = (quantize_level(v as u8, levels, th) * weight) as u8;
+                }
+            }
+        }
+        lut
+    })
+}
+
+/// One channel's dithered level: `v` scaled to `0..levels − 1`, offset by the threshold `th`.
+fn quantize_level(v: u8, levels: f32, th: f32) -> u32 {
+    let f = v as f32 / 255.0 * (levels - 1.0) + th;
+    f.round().clamp(0.0, levels - 1.0) as u32
+}
+
+/// [`quantize_gif`] as it was written first, a float rounding per channel (the tests check the
+/// table against it).
+#[cfg(test)]
+pub(crate) fn quantize_gif_reference(img: &RgbImage) -> Vec<u8> {
     let (w, h) = (img.width as usize, img.height as usize);
     let mut out = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
             let i = (y * w + x) * 3;
             let th = (BAYER4[y & 3][x & 3] + 0.5) / 16.0 - 0.5;
-            let q = |v: u8, levels: f32| -> u32 {
-                let f = v as f32 / 255.0 * (levels - 1.0) + th;
-                f.round().clamp(0.0, levels - 1.0) as u32
-            };
             let (r, g, b) = (
-                q(img.data[i], 6.0),
-                q(img.data[i + 1], 7.0),
-                q(img.data[i + 2], 6.0),
+                quantize_level(img.data[i], 6.0, th),
+                quantize_level(img.data[i + 1], 7.0, th),
+                quantize_level(img.data[i + 2], 6.0, th),
             );
             out.push((r * 42 + g * 6 + b) as u8);
         }
