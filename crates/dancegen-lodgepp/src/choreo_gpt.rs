@@ -16,12 +16,16 @@ use dancegen_nn::attention::AttnMasks;
 use dancegen_nn::burn;
 use dancegen_nn::gpt::{Gpt, GptConfig, KvCache, SamplingOptions, pick};
 use dancegen_nn::pos_encoding::sinusoidal;
+use dancegen_nn::progress::{self, Cancelled, StepHook};
 use dancegen_nn::rng::SplitMix64;
 use dancegen_nn::transformer::{EncoderLayer, EncoderLayerConfig};
 
 use burn::module::Module;
 use burn::nn::{Embedding, EmbeddingConfig, Linear, LinearConfig};
 use burn::tensor::{Device, Int, Tensor, TensorData};
+
+/// The part name of the GPT's token generation in progress reports.
+pub const CHOREOGRAPHY: &str = "choreography";
 
 use crate::config::{ChoreoGptConfig, TOKEN_FRAMES};
 
@@ -123,7 +127,7 @@ impl ChoreoGpt {
 
     /// Tokens for `music` `[1, F, 35]` (`F` a multiple of 4) of any length: windows of
     /// `window` tokens, each after the first seeded with the previous window's last `overlap`.
-    /// BOS is never picked.
+    /// BOS is never picked. `hook` hears of every new token (part [`CHOREOGRAPHY`]).
     pub fn generate(
         &self,
         music: Tensor<3>,
@@ -131,7 +135,8 @@ impl ChoreoGpt {
         window: usize,
         overlap: usize,
         opts: &SamplingOptions,
-    ) -> Vec<i64> {
+        hook: &dyn StepHook,
+    ) -> Result<Vec<i64>, Cancelled> {
         let [_, f, _] = music.dims();
         let total = f / TOKEN_FRAMES;
         assert!(window > overlap, "GPT window must exceed its overlap");
@@ -163,11 +168,12 @@ impl ChoreoGpt {
                     let masked = logits.slice([0..1, 0..self.codes]);
                     let t = pick(masked, opts, &mut rng)[0];
                     out.push(t);
+                    progress::step(hook, CHOREOGRAPHY, out.len(), total)?;
                     t
                 };
                 prev = next;
             }
         }
-        out
+        Ok(out)
     }
 }

@@ -15,6 +15,7 @@ use dancegen_nn::burn;
 use dancegen_nn::diffusion::longform::{ChannelLayout, stitch};
 use dancegen_nn::diffusion::pddm::ResidualShift;
 use dancegen_nn::gpt::SamplingOptions;
+use dancegen_nn::progress::{Cancelled, DENOISING, NoHook, StepHook};
 
 use burn::tensor::{Device, Int, Tensor, TensorData};
 
@@ -26,7 +27,7 @@ use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
-use crate::sampler::{HardCues, PddmSampleOptions, sample_windows};
+use crate::sampler::{HardCues, PddmSampleOptions, sample_windows_hooked};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
 use dancegen_motion::smoothing::{Ends, gaussian_smooth};
 
@@ -122,6 +123,23 @@ impl SoloModel {
         device: &Device,
         grad_device: &Device,
     ) -> GeneratedDance {
+        self.generate_hooked(music, beat_frames, opts, device, grad_device, &NoHook)
+            .expect("NoHook never cancels")
+    }
+
+    /// [`SoloModel::generate`], telling `hook` of every GPT token
+    /// ([`crate::choreo_gpt::CHOREOGRAPHY`], Lodge++ sampler only) and every denoising step
+    /// (`DENOISING`, counted over all windows for the autoregressive sampler), and stopping
+    /// with [`Cancelled`] when it answers `Break`.
+    pub fn generate_hooked(
+        &self,
+        music: &[f32],
+        beat_frames: &[usize],
+        opts: &GenerateOptions,
+        device: &Device,
+        grad_device: &Device,
+        hook: &dyn StepHook,
+    ) -> Result<GeneratedDance, Cancelled> {
         let frames = music.len() / MUSIC_DIMS;
         assert!(frames > 0, "no music frames");
         let n = self.config.pddm.pddm.window;
@@ -134,13 +152,14 @@ impl SoloModel {
         };
         let (mut out, nwin, key_motions, seam_correction) = match opts.sampler {
             Sampler::Lodgepp => {
-                let (w, k) = self.lodgepp(music, beat_frames, frames, opts, device, grad_device);
+                let (w, k) =
+                    self.lodgepp(music, beat_frames, frames, opts, device, grad_device, hook)?;
                 let l = w.len() / (n * DIMS);
                 let (w, c) = anchored(w, shared_boundary_cues(l));
                 (place_windows(&w, n, n), l, k, c)
             }
             Sampler::Autoregressive => {
-                let w = self.autoregressive(music, frames, opts, device, grad_device);
+                let w = self.autoregressive(music, frames, opts, device, grad_device, hook)?;
                 let l = w.len() / (n * DIMS);
                 let cues = (0..l)
                     .map(|i| CuedFrames {
@@ -152,7 +171,7 @@ impl SoloModel {
                 (place_windows(&w, n, n - BOUNDARY_FRAMES), l, 0, c)
             }
             Sampler::Edge => {
-                let (placed, l) = self.edge(music, frames, opts, device, grad_device);
+                let (placed, l) = self.edge(music, frames, opts, device, grad_device, hook)?;
                 (placed, l, 0, SeamCorrection::default())
             }
         };
@@ -166,13 +185,13 @@ impl SoloModel {
             );
         }
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
-        GeneratedDance {
+        Ok(GeneratedDance {
             n_frames: out.len() / DIMS,
             frames: out,
             windows: nwin,
             key_motions,
             seam_correction,
-        }
+        })
     }
 
     /// Music `[frames, 35]` cut into `count` windows of `n` frames starting every `advance`
@@ -234,14 +253,20 @@ impl SoloModel {
         frames: usize,
         opts: &GenerateOptions,
         device: &Device,
-    ) -> Vec<f32> {
+        hook: &dyn StepHook,
+    ) -> Result<Vec<f32>, Cancelled> {
         let padded = frames.div_ceil(TOKEN_FRAMES) * TOKEN_FRAMES;
         let m = Self::music_windows(music, frames, padded, padded, 1);
         let mt = Tensor::<3>::from_data(TensorData::new(m, [1, padded, MUSIC_DIMS]), device);
         let g = &self.config.gpt.gpt;
-        let tokens =
-            self.gpt
-                .generate(mt, opts.genre, g.window_tokens, g.overlap_tokens, &opts.gpt);
+        let tokens = self.gpt.generate(
+            mt,
+            opts.genre,
+            g.window_tokens,
+            g.overlap_tokens,
+            &opts.gpt,
+            hook,
+        )?;
         let nt = tokens.len();
         let idx = Tensor::<3, Int>::from_data(TensorData::new(tokens, [1, nt, 1]), device);
         let coarse: Vec<f32> = self
@@ -260,7 +285,7 @@ impl SoloModel {
                 f[k] = ((raw - self.norm.mean[c]) / self.norm.std[c]) as f32;
             }
         }
-        out
+        Ok(out)
     }
 
     /// A library clip `[8, 151]` for the coarse frames `[start, start + 8)`, with the coarse
@@ -286,6 +311,7 @@ impl SoloModel {
     }
 
     /// The full system; returns the windows `[l, n, 151]` and the number of key motions.
+    #[allow(clippy::too_many_arguments)]
     fn lodgepp(
         &self,
         music: &[f32],
@@ -294,11 +320,12 @@ impl SoloModel {
         opts: &GenerateOptions,
         device: &Device,
         grad_device: &Device,
-    ) -> (Vec<f32>, usize) {
+        hook: &dyn StepHook,
+    ) -> Result<(Vec<f32>, usize), Cancelled> {
         let n = self.config.pddm.pddm.window;
         let l = frames.div_ceil(n);
         let started = std::time::Instant::now();
-        let coarse = self.coarse_dance(music, frames, opts, device);
+        let coarse = self.coarse_dance(music, frames, opts, device, hook)?;
         tracing::debug!(
             "timing: coarse dance (GPT + VQ-VAE) in {:?}",
             started.elapsed()
@@ -385,7 +412,7 @@ impl SoloModel {
             mask: Tensor::from_data(TensorData::new(cue_m, [l, n, DIMS]), device),
         };
         tracing::debug!("timing: primitives ready at {:?}", started.elapsed());
-        let x = sample_windows(
+        let x = sample_windows_hooked(
             &self.pddm,
             &self.shift(),
             &cond,
@@ -393,10 +420,11 @@ impl SoloModel {
             &self.sample_opts(opts, opts.seed),
             device,
             grad_device,
-        );
+            hook,
+        )?;
         let x = host(x);
         tracing::debug!("timing: PDDM sampling done at {:?}", started.elapsed());
-        (x, keys)
+        Ok((x, keys))
     }
 
     /// Window after window, each starting with the previous one's last 4 frames.
@@ -407,7 +435,8 @@ impl SoloModel {
         opts: &GenerateOptions,
         device: &Device,
         grad_device: &Device,
-    ) -> Vec<f32> {
+        hook: &dyn StepHook,
+    ) -> Result<Vec<f32>, Cancelled> {
         let n = self.config.pddm.pddm.window;
         let adv = n - BOUNDARY_FRAMES;
         let l = frames.saturating_sub(BOUNDARY_FRAMES).div_ceil(adv).max(1);
@@ -431,7 +460,11 @@ impl SoloModel {
                 values: Tensor::from_data(TensorData::new(cue_v, [1, n, DIMS]), device),
                 mask: Tensor::from_data(TensorData::new(cue_m, [1, n, DIMS]), device),
             };
-            let x = host(sample_windows(
+            // Steps are counted over all windows, so the hook sees one run of l · steps.
+            let per_window = |_: &'static str, done: usize, total: usize| {
+                hook.on_step(DENOISING, w * total + done, l * total)
+            };
+            let x = host(sample_windows_hooked(
                 &self.pddm,
                 &shift,
                 &cond,
@@ -439,11 +472,12 @@ impl SoloModel {
                 &self.sample_opts(opts, opts.seed.wrapping_add(w as u64)),
                 device,
                 grad_device,
-            ));
+                &per_window,
+            )?);
             out.extend_from_slice(&x);
             prev = Some(x);
         }
-        out
+        Ok(out)
     }
 
     /// EDGE-style: half-overlapping windows in one batch, first halves overwritten after every
@@ -457,7 +491,8 @@ impl SoloModel {
         opts: &GenerateOptions,
         device: &Device,
         grad_device: &Device,
-    ) -> (Vec<f32>, usize) {
+        hook: &dyn StepHook,
+    ) -> Result<(Vec<f32>, usize), Cancelled> {
         let n = self.config.pddm.pddm.window;
         let half = n / 2;
         let l = frames.saturating_sub(half).div_ceil(half).max(1);
@@ -478,7 +513,8 @@ impl SoloModel {
                     overwrite_first_halves_relative(x, half)
                 }
             },
-        ));
+            hook,
+        )?);
         // Window-relative roots → one path: window w starts where window w − 1 is at its
         // middle frame (`win` already holds window w − 1 in global coordinates).
         for w in 1..l {
@@ -501,7 +537,7 @@ impl SoloModel {
             .convert::<f32>()
             .try_to_vec::<f32>()
             .unwrap();
-        (out, l)
+        Ok((out, l))
     }
 }
 

@@ -7,6 +7,7 @@
 use dancegen_nn::burn;
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::diffusion::pddm::ResidualShift;
+use dancegen_nn::progress::{self, Cancelled, DENOISING, NoHook, StepHook};
 
 use burn::tensor::{Device, Tensor};
 
@@ -54,6 +55,23 @@ pub fn sample_windows(
     device: &Device,
     grad_device: &Device,
 ) -> Tensor<3> {
+    sample_windows_hooked(net, shift, cond, cues, opts, device, grad_device, &NoHook)
+        .expect("NoHook never cancels")
+}
+
+/// [`sample_windows`], telling `hook` after every step (part [`DENOISING`]) and stopping with
+/// [`Cancelled`] when it answers `Break`.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_windows_hooked(
+    net: &PddmDenoiser,
+    shift: &ResidualShift,
+    cond: &PddmCond,
+    cues: Option<&HardCues>,
+    opts: &PddmSampleOptions,
+    device: &Device,
+    grad_device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Tensor<3>, Cancelled> {
     sample_windows_with(
         net,
         shift,
@@ -65,12 +83,14 @@ pub fn sample_windows(
             Some(c) => c.apply(d),
             None => d,
         },
+        hook,
     )
 }
 
 /// [`sample_windows`] with any constraint `after_step(x, is_final)` applied to the initial state
 /// and after every step (EDGE's long-form overwrite, hard cues); `is_final` marks the result of
-/// the last step.
+/// the last step. `hook` hears of every step (part [`DENOISING`]).
+#[allow(clippy::too_many_arguments)]
 pub fn sample_windows_with(
     net: &PddmDenoiser,
     shift: &ResidualShift,
@@ -79,7 +99,8 @@ pub fn sample_windows_with(
     device: &Device,
     grad_device: &Device,
     after_step: impl Fn(Tensor<3>, bool) -> Tensor<3>,
-) -> Tensor<3> {
+    hook: &dyn StepHook,
+) -> Result<Tensor<3>, Cancelled> {
     let dims = cond.primitives.dims();
     let b = dims[0];
     let mut rng = SeededNoise::new(opts.seed);
@@ -138,6 +159,7 @@ pub fn sample_windows_with(
             x0 = guide(x0, &net.denorm, p, g, grad_device);
         }
         d = after_step(shift.step_to(d, x0, t, s, rng.tensor(dims, device)), s == 0);
+        progress::step(hook, DENOISING, i + 1, ts.len())?;
     }
-    d
+    Ok(d)
 }

@@ -28,6 +28,7 @@ pub mod mask;
 pub mod masked;
 pub mod mlp;
 pub mod pos_encoding;
+pub mod progress;
 pub mod quant;
 pub mod rng;
 pub mod ssm;

@@ -20,8 +20,9 @@
 use dancegen_nn::burn;
 use dancegen_nn::diffusion::{
     ChannelScale, Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, WeightSchedule,
-    sample,
+    sample_hooked,
 };
+use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
 
 use burn::tensor::{Device, Tensor};
 
@@ -119,6 +120,24 @@ pub fn sample_latent(
     s: &LatentSampling,
     device: &Device,
 ) -> Tensor<3> {
+    sample_latent_hooked(net, schedule, c, latent_dim, levels, s, device, &NoHook)
+        .expect("NoHook never cancels")
+}
+
+/// [`sample_latent`], telling `hook` after every denoising step (part `DENOISING`, counted
+/// over all windows for the autoregressive sampler) and stopping with [`Cancelled`] when it
+/// answers `Break`.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_latent_hooked(
+    net: &LatentDenoiser,
+    schedule: &Schedule,
+    c: &DuetCond,
+    latent_dim: usize,
+    levels: usize,
+    s: &LatentSampling,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Tensor<3>, Cancelled> {
     let k = c.leader.dims()[1];
     let t = net.block_tokens;
     let guidance = level_guidance(&s.guidance, levels, latent_dim / levels);
@@ -127,15 +146,16 @@ pub fn sample_latent(
         let blocks = cond_blocks(c, t);
         let nb = blocks.leader.dims()[0];
         let model = PreparedDenoiser::new(net, &blocks, guided, Layout::Batched);
-        let x = sample(
+        let x = sample_hooked(
             &model,
             schedule,
             [nb, t, latent_dim],
             Some(&blocks),
             &options(s, guidance, s.seed),
             device,
-        );
-        return x.reshape([1, nb * t, latent_dim]).narrow(1, 0, k);
+            hook,
+        )?;
+        return Ok(x.reshape([1, nb * t, latent_dim]).narrow(1, 0, k));
     }
     // Autoregressive windows.
     let hop = t / 2;
@@ -163,14 +183,19 @@ pub fn sample_latent(
                 activity: CueActivity::Hard,
             });
         }
-        let x = sample(
+        let windows = starts.len();
+        let per_window = |part: &'static str, done: usize, total: usize| {
+            hook.on_step(part, i * total + done, windows * total)
+        };
+        let x = sample_hooked(
             &model,
             schedule,
             [1, t, latent_dim],
             Some(&w),
             &opts,
             device,
-        );
+            &per_window,
+        )?;
         out = Some(match out {
             None => x,
             Some(prev) => {
@@ -179,5 +204,5 @@ pub fn sample_latent(
             }
         });
     }
-    out.expect("at least one window")
+    Ok(out.expect("at least one window"))
 }

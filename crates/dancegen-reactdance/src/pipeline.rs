@@ -22,8 +22,9 @@ use dancegen_motion::repr::motion::GroundMode;
 use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::diffusion::{BetaSchedule, Schedule};
+use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
 
-use crate::blc::{LatentSampling, sample_latent};
+use crate::blc::{LatentSampling, sample_latent_hooked};
 use crate::bundle::DuetModel;
 use crate::config::MUSIC_DIMS;
 use crate::denoiser::DuetCond;
@@ -61,15 +62,45 @@ pub fn generate_follower(
     separation: Option<&SeparationConfig>,
     device: &Device,
 ) -> Result<Generated, String> {
+    generate_follower_hooked(model, leader, music, sampling, separation, device, &NoHook)
+        .map_err(|e| e.to_string())
+}
+
+/// Why [`generate_follower_hooked`] stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum FollowerError {
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl From<String> for FollowerError {
+    fn from(s: String) -> Self {
+        FollowerError::Invalid(s)
+    }
+}
+
+/// [`generate_follower`], telling `hook` after every denoising step and stopping with
+/// [`FollowerError::Cancelled`] when it answers `Break`.
+pub fn generate_follower_hooked(
+    model: &DuetModel,
+    leader: &SmplMotion,
+    music: &[f32],
+    sampling: &LatentSampling,
+    separation: Option<&SeparationConfig>,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Generated, FollowerError> {
     let t = leader.frames();
     if t == 0 {
-        return Err("the leader has no frames".into());
+        return Err(FollowerError::Invalid("the leader has no frames".into()));
     }
     if music.len() < t * MUSIC_DIMS {
-        return Err(format!(
+        return Err(FollowerError::Invalid(format!(
             "{} music frames for a {t}-frame leader",
             music.len() / MUSIC_DIMS
-        ));
+        )));
     }
     let ae = &model.config.autoencoder;
     let f = ae.frames_per_token();
@@ -103,7 +134,7 @@ pub fn generate_follower(
     };
     let schedule = Schedule::new(BetaSchedule::Cosine, model.config.denoiser.timesteps);
     let t0 = Instant::now();
-    let latent = sample_latent(
+    let latent = sample_latent_hooked(
         &model.denoiser,
         &schedule,
         &cond,
@@ -111,7 +142,8 @@ pub fn generate_follower(
         ae.num_levels,
         sampling,
         device,
-    );
+        hook,
+    )?;
     let sample_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let decoded = model.autoencoder.decode(latent).narrow(1, 0, t);
@@ -136,7 +168,9 @@ pub fn generate_follower(
         .chain(&follower.poses)
         .any(|v| !v.is_finite())
     {
-        return Err("the model produced non-finite values".into());
+        return Err(FollowerError::Invalid(
+            "the model produced non-finite values".into(),
+        ));
     }
     let decode_s = t1.elapsed().as_secs_f64();
     let mut separation_max_m = 0.0f64;

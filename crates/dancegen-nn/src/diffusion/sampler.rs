@@ -17,6 +17,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::noise::SeededNoise;
 use super::schedule::{Schedule, timestep_tensor};
 use super::{Conditioning, Denoiser};
+use crate::progress::{self, Cancelled, DENOISING, NoHook, StepHook};
 
 /// EDGE's guidance weight (anchors D.1; Lodge and TCDiff++ use the same).
 pub const EDGE_GUIDANCE: f64 = 2.0;
@@ -366,6 +367,22 @@ pub fn sample<M: Denoiser>(
     opts: &SampleOptions,
     device: &Device,
 ) -> Tensor<3> {
+    sample_hooked(model, schedule, shape, cond, opts, device, &NoHook)
+        .expect("NoHook never cancels")
+}
+
+/// [`sample`], telling `hook` after every step (part [`DENOISING`], `done` of the run's steps)
+/// and stopping with [`Cancelled`] when it answers `Break`. The same seed gives the same
+/// result as [`sample`].
+pub fn sample_hooked<M: Denoiser>(
+    model: &M,
+    schedule: &Schedule,
+    shape: [usize; 3],
+    cond: Option<&M::Cond>,
+    opts: &SampleOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Tensor<3>, Cancelled> {
     let big_t = schedule.timesteps();
     let pairs: Vec<(usize, i64)> = match opts.method {
         Method::Ddpm => (0..big_t).rev().map(|t| (t, t as i64 - 1)).collect(),
@@ -420,6 +437,7 @@ pub fn sample<M: Denoiser>(
             };
             x = v * cue.mask.clone() + x * (cue.mask.clone().neg() + 1.0);
         }
+        progress::step(hook, DENOISING, i + 1, n)?;
     }
-    x
+    Ok(x)
 }
