@@ -17,14 +17,15 @@ use symphonia::core::meta::MetadataOptions;
 
 use crate::error::{MusicError, Result};
 
-/// Where a song comes from: a file, or bytes compiled into a program (the bundled demo song).
+/// Where a song comes from: a file, or bytes in memory (the bundled demo song, an upload).
 #[derive(Clone, Debug)]
 pub enum AudioSource {
     File(PathBuf),
-    /// `name` is used for messages and as the format hint (its extension).
+    /// `name` is used for messages and as the format hint (its extension). Shared, so a
+    /// long-running process can hand one upload to several jobs without copying it.
     Bytes {
         name: PathBuf,
-        bytes: &'static [u8],
+        bytes: std::sync::Arc<[u8]>,
     },
 }
 
@@ -78,7 +79,9 @@ impl MonoDecoder {
                 let len = file.metadata().map(|m| m.len()).unwrap_or(0);
                 (Box::new(file), len)
             }
-            AudioSource::Bytes { bytes, .. } => (Box::new(Cursor::new(*bytes)), bytes.len() as u64),
+            AudioSource::Bytes { bytes, .. } => {
+                (Box::new(Cursor::new(bytes.clone())), bytes.len() as u64)
+            }
         };
         if len == 0 {
             return Err(MusicError::EmptyFile {
