@@ -404,10 +404,10 @@ pub struct BuildReport {
 
 /// Builds the data set described by `opts` (see the crate docs).
 pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport, DatasetError> {
-    if let Some(g) = &opts.genre {
-        if g.trim().is_empty() {
-            return Err(DatasetError::Options("--genre must not be empty".into()));
-        }
+    if let Some(g) = &opts.genre
+        && g.trim().is_empty()
+    {
+        return Err(DatasetError::Options("--genre must not be empty".into()));
     }
     let clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,

@@ -162,7 +162,7 @@ pub fn foot_skating_ratio(joints: &[f64], num_joints: usize) -> FootSkating {
     );
     let frame_len = num_joints * 3;
     assert!(
-        joints.len() % frame_len == 0,
+        joints.len().is_multiple_of(frame_len),
         "joint array of {} values is not a whole number of {num_joints}x3 frames",
         joints.len()
     );
@@ -194,7 +194,7 @@ pub fn foot_skating_ratio(joints: &[f64], num_joints: usize) -> FootSkating {
 /// If `feet.len()` is not a multiple of 12.
 pub fn foot_skating_from_grounded_feet(feet: &[f64]) -> FootSkating {
     assert!(
-        feet.len() % 12 == 0,
+        feet.len().is_multiple_of(12),
         "feet array of {} values is not a whole number of 4x3 frames",
         feet.len()
     );

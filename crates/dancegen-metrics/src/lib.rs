@@ -119,7 +119,7 @@ pub enum FeatureError {
 
 /// Number of frames in a flat `(T, 24, 3)` slice, or an error if it is not whole frames.
 pub fn frame_count(joints: &[f64]) -> Result<usize, FeatureError> {
-    if joints.len() % FRAME_LEN != 0 {
+    if !joints.len().is_multiple_of(FRAME_LEN) {
         return Err(FeatureError::NotFrames { len: joints.len() });
     }
     Ok(joints.len() / FRAME_LEN)

@@ -27,7 +27,7 @@ pub fn mpjpe_per_pose(gt: &[f64], pred: &[f64], num_joints: usize) -> Vec<f64> {
     assert!(num_joints > 0, "MPJPE needs at least one joint");
     let frame_len = num_joints * 3;
     assert!(
-        gt.len() % frame_len == 0,
+        gt.len().is_multiple_of(frame_len),
         "joint array of {} values is not a whole number of {num_joints}x3 frames",
         gt.len()
     );

@@ -60,7 +60,7 @@ pub fn pfc_clip_score(joints: &[f64], num_joints: usize) -> Option<f64> {
         "PFC needs at least 12 joints, got {num_joints}"
     );
     assert!(
-        joints.len() % (num_joints * 3) == 0,
+        joints.len().is_multiple_of(num_joints * 3),
         "joint array of {} values is not a whole number of {num_joints}x3 frames",
         joints.len()
     );

@@ -136,20 +136,20 @@ impl Protocol {
         if num_joints != NUM_JOINTS {
             return Err(ProtocolError::Joints { joints: num_joints });
         }
-        if joints.len() % FRAME_LEN != 0 {
+        if !joints.len().is_multiple_of(FRAME_LEN) {
             return Err(ProtocolError::NotFrames { len: joints.len() });
         }
         if !(fps.is_finite() && fps > 0.0) {
             return Err(ProtocolError::BadFps(fps));
         }
-        if let Some(expected) = self.fps {
-            if (fps - expected).abs() > 1e-3 {
-                return Err(ProtocolError::Fps {
-                    protocol: self.name,
-                    input: fps,
-                    expected,
-                });
-            }
+        if let Some(expected) = self.fps
+            && (fps - expected).abs() > 1e-3
+        {
+            return Err(ProtocolError::Fps {
+                protocol: self.name,
+                input: fps,
+                expected,
+            });
         }
         let total = joints.len() / FRAME_LEN;
         if let Some(i) = joints.iter().position(|v| !v.is_finite()) {

@@ -274,7 +274,7 @@ pub fn skeleton_motion_to_bvh(
     }
     let nj = skel.len();
     let frames = trans.len() / 3;
-    if trans.len() % 3 != 0 {
+    if !trans.len().is_multiple_of(3) {
         return Err(BvhMotionError::Shape {
             what: "trans",
             got: trans.len(),

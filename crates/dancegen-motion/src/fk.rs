@@ -269,7 +269,7 @@ fn frame_count<T>(
     let joints = skeleton.len();
     let width = rotations.width();
     let len = rotations.data().len();
-    if len % (joints * width) != 0 {
+    if !len.is_multiple_of(joints * width) {
         return Err(FkError::RotationShape { len, joints, width });
     }
     let frames = len / (joints * width);

@@ -500,7 +500,7 @@ pub fn glb_bytes_multi(
 fn check_dancer(joints: usize, dancer: &DancerAnimation<'_>) -> Result<usize, GlbInputError> {
     let rot = dancer.local_rotations_axis_angle;
     let root_translation = dancer.root_translation;
-    if rot.len() % (joints * 3) != 0 {
+    if !rot.len().is_multiple_of(joints * 3) {
         return Err(GlbInputError::RotationShape {
             len: rot.len(),
             joints,
@@ -534,10 +534,10 @@ const CHUNK_JSON: u32 = 0x4E4F_534A;
 const CHUNK_BIN: u32 = 0x004E_4942;
 
 fn assemble_glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -560,7 +560,7 @@ struct BinBuilder {
 
 impl BinBuilder {
     fn view(&mut self, views: &mut Vec<Value>, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.data.len() % 4 != 0 {
+        while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.data.len(), "byteLength": bytes.len()});

@@ -989,7 +989,7 @@ impl<'a> Machine<'a> {
     }
 
     fn pairs(&self, items: Vec<usize>, opcode: &'static str) -> Res<Vec<(usize, usize)>> {
-        if items.len() % 2 != 0 {
+        if !items.len().is_multiple_of(2) {
             return Err(self.err(PickleErrorKind::TypeMismatch {
                 opcode,
                 expected: "an even number of items",

@@ -486,7 +486,7 @@ pub fn wrap_angle(a: f64) -> f64 {
 
 fn check_len(len: usize, width: usize, what: &str) {
     assert!(
-        len % width == 0,
+        len.is_multiple_of(width),
         "{what}: slice length {len} is not a multiple of {width}"
     );
 }

@@ -592,10 +592,10 @@ pub fn mirror_from_names<S: AsRef<str>>(names: &[S]) -> Vec<usize> {
             let name = name.as_ref();
             for (a, b) in PAIRS {
                 for (from, to) in [(a, b), (b, a)] {
-                    if let Some(rest) = name.strip_prefix(from) {
-                        if let Some(&k) = index.get(format!("{to}{rest}").as_str()) {
-                            return k;
-                        }
+                    if let Some(rest) = name.strip_prefix(from)
+                        && let Some(&k) = index.get(format!("{to}{rest}").as_str())
+                    {
+                        return k;
                     }
                 }
             }

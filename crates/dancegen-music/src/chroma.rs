@@ -43,7 +43,7 @@ pub struct CqToChroma {
 
 impl CqToChroma {
     pub fn new(n_input: usize, bins_per_octave: usize, n_chroma: usize, fmin: f64) -> Result<Self> {
-        if n_chroma == 0 || bins_per_octave == 0 || bins_per_octave % n_chroma != 0 {
+        if n_chroma == 0 || bins_per_octave == 0 || !bins_per_octave.is_multiple_of(n_chroma) {
             return Err(MusicError::InvalidParameter(format!(
                 "incompatible CQ merge: bins_per_octave {bins_per_octave} must be a multiple \
                  of n_chroma {n_chroma}"

@@ -386,7 +386,7 @@ impl Geometry {
         let mut n_halvings = 0;
         let mut h = hop;
         for _ in 1..n_octaves {
-            if h % 2 != 0 {
+            if !h.is_multiple_of(2) {
                 break;
             }
             h /= 2;

@@ -260,15 +260,15 @@ impl MonoDecoder {
     fn check_complete(&self) -> Result<()> {
         // One codec packet of slack: containers may count encoder padding differently.
         const SLACK_FRAMES: u64 = 8192;
-        if let Some(total) = self.total_frames {
-            if self.decoded_frames + SLACK_FRAMES < total {
-                let sr = self.sample_rate.max(1) as f64;
-                return Err(self.truncated(format!(
-                    "decoded {:.2} s of the {:.2} s its header declares",
-                    self.decoded_frames as f64 / sr,
-                    total as f64 / sr
-                )));
-            }
+        if let Some(total) = self.total_frames
+            && self.decoded_frames + SLACK_FRAMES < total
+        {
+            let sr = self.sample_rate.max(1) as f64;
+            return Err(self.truncated(format!(
+                "decoded {:.2} s of the {:.2} s its header declares",
+                self.decoded_frames as f64 / sr,
+                total as f64 / sr
+            )));
         }
         Ok(())
     }

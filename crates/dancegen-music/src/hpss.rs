@@ -263,7 +263,7 @@ pub fn hpss_masks(mag: &FrameMatrix, p: &HpssParams) -> Result<(FrameMatrix, Fra
 /// zero padding: the harmonic and percussive signals, each `y.len()` samples.
 pub fn hpss(y: &[f32], n_fft: usize, hop: usize, p: &HpssParams) -> Result<(Vec<f32>, Vec<f32>)> {
     p.validate()?;
-    if n_fft == 0 || hop == 0 || n_fft % 2 != 0 {
+    if n_fft == 0 || hop == 0 || !n_fft.is_multiple_of(2) {
         return Err(MusicError::InvalidParameter(format!(
             "HPSS needs an even n_fft and a positive hop (got {n_fft}, {hop})"
         )));

@@ -74,7 +74,7 @@ pub(crate) fn frames_of(
     data: &[f32],
     width: usize,
 ) -> Result<usize, ReprError> {
-    if data.len() % width != 0 {
+    if !data.len().is_multiple_of(width) {
         return Err(ReprError::Shape {
             what,
             got: data.len(),
