@@ -35,8 +35,10 @@ pub enum Command {
     #[command(subcommand)]
     Dataset(DatasetCommand),
     /// Generate a solo dance for a song (Lodge++), or with --leader the partner of a given
-    /// leader (ReactDance); the bundled default models.
+    /// leader (ReactDance); the installed default models (see `dancegen models`).
     Generate(GenerateArgs),
+    /// List the models found and where they were looked for, or install models.
+    Models(ModelsArgs),
     /// Assemble a Lodge++ model directory from its three training runs.
     Bundle(BundleArgs),
 }
@@ -54,16 +56,36 @@ pub enum SamplerArg {
     Blc,
 }
 
+/// How `generate` reports progress on stderr.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ProgressArg {
+    /// A progress bar when stderr is a terminal (nothing with -q).
+    #[default]
+    Bar,
+    /// One JSON object per line: {"stage": ..., "fraction": 0..1, "eta_s": ...}; the last
+    /// one has fraction 1.
+    Json,
+    /// Nothing.
+    None,
+}
+
 #[derive(Args, Debug)]
 pub struct GenerateArgs {
     /// Song (WAV, FLAC, OGG, MP3, ...); default: the bundled demo song.
     pub song: Option<PathBuf>,
+    /// The dance system (default: solo, or duet with --leader).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(
+        dancegen_generate::systems::SYSTEMS.map(|s| s.name)))]
+    pub system: Option<String>,
+    /// Progress on stderr.
+    #[arg(long, value_enum, default_value_t = ProgressArg::Bar)]
+    pub progress: ProgressArg,
     /// Output file, by extension: .glb .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres, Y-up,
     /// 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
     #[arg(short, long, value_name = "FILE")]
     pub output: Vec<PathBuf>,
-    /// Model directory (default: the bundled models/lodgepp-small, or models/reactdance-small
-    /// with --leader).
+    /// Model directory (default: lodgepp-small, or reactdance-small with --leader, found on
+    /// the model search path: `dancegen models` shows it).
     #[arg(long, value_name = "DIR")]
     pub model: Option<PathBuf>,
     /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
@@ -122,6 +144,36 @@ pub struct GenerateArgs {
     /// pinning planted feet (post-processing steps, not part of Lodge++).
     #[arg(long)]
     pub no_foot_lock: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ModelsArgs {
+    #[command(subcommand)]
+    pub command: Option<ModelsCommand>,
+    /// Print the list as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum ModelsCommand {
+    /// The models found on the search path, and the folders searched (the default).
+    List {
+        /// Print the list as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Copy models (folders holding model.toml) into the data folder, where every dancegen
+    /// binary of this user finds them.
+    Install {
+        /// A folder of models or one model folder (default: the models/ folder of the
+        /// checkout this binary was built from).
+        #[arg(long, value_name = "DIR")]
+        from: Option<PathBuf>,
+        /// Destination folder of models (default: the platform data folder).
+        #[arg(long, value_name = "DIR")]
+        to: Option<PathBuf>,
+    },
 }
 
 #[derive(Args, Debug)]

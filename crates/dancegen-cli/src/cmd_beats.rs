@@ -7,14 +7,15 @@ use dancegen_music::features::{ExtractOptions, FeatureSet, extract_with_signal};
 use serde_json::json;
 
 use crate::cli::BeatsArgs;
-use crate::demo::song_or_demo;
 use crate::progress::spinner;
 
 pub fn run(args: &BeatsArgs, quiet: bool) -> Result<()> {
     if let Some(p) = &args.plot {
         crate::plot::check_png_path(p)?;
     }
-    let source = song_or_demo(args.audio.as_ref());
+    let source = dancegen_generate::song::audio_source(&dancegen_generate::Song::file_or_demo(
+        args.audio.as_deref(),
+    ));
     let label = source.label().display().to_string();
     let pb = spinner(&format!("tracking beats in {label}"), quiet);
     let opts = ExtractOptions {

@@ -9,7 +9,6 @@ use dancegen_music::features::{ExtractOptions, FeatureSet, MusicFeatures, extrac
 use serde_json::json;
 
 use crate::cli::{FeaturesArgs, SetArg};
-use crate::demo::song_or_demo;
 use crate::progress::spinner;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,10 +39,10 @@ pub fn run(args: &FeaturesArgs, quiet: bool) -> Result<()> {
         SetArg::Edge35 => FeatureSet::Edge35,
         SetArg::Tcdiff438 => FeatureSet::Tcdiff438,
     };
-    if let Some(b) = args.start_bpm {
-        if !(b.is_finite() && b > 0.0) {
-            bail!("--start-bpm must be a positive number, got {b}");
-        }
+    if let Some(b) = args.start_bpm
+        && !(b.is_finite() && b > 0.0)
+    {
+        bail!("--start-bpm must be a positive number, got {b}");
     }
     if args.slice5s && set != FeatureSet::Edge35 {
         bail!("--slice5s is EDGE's slicing and applies to --set edge35 only");
@@ -51,7 +50,9 @@ pub fn run(args: &FeaturesArgs, quiet: bool) -> Result<()> {
     if args.slice5s && !(args.slice_stride.is_finite() && args.slice_stride > 0.0) {
         bail!("--slice-stride must be positive, got {}", args.slice_stride);
     }
-    let source = song_or_demo(args.audio.as_ref());
+    let source = dancegen_generate::song::audio_source(&dancegen_generate::Song::file_or_demo(
+        args.audio.as_deref(),
+    ));
     let label = source.label().display().to_string();
     let pb = spinner(&format!("analysing {label}"), quiet);
     let started = std::time::Instant::now();

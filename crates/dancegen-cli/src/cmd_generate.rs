@@ -1,311 +1,127 @@
-//! `dancegen generate`: a solo dance for a song with the Lodge++ model (the bundled default
-//! model unless `--model` names another).
-//!
-//! Song → EDGE-35 features and beats at 30 fps (the whole song, then `--start/--end`) →
-//! `dancegen_lodgepp` → EDGE-151 frames → SMPL motion (Y-up, metres, 30 fps) standing on the
-//! floor → every `-o` file by its extension.
+//! `dancegen generate`: argument parsing and a progress bar around
+//! `dancegen_generate::Generator` (which does the work for every system).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
-use dancegen_lodgepp::bundle::SoloModel;
-use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
-use dancegen_motion::repr::motion::GroundMode;
-use dancegen_motion::repr::{Edge151, SmplMotion};
-use dancegen_music::decode::AudioSource;
-use dancegen_music::features::{ExtractOptions, FeatureSet, extract};
-use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
+use anyhow::{Result, bail};
+use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest};
+use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader};
+use dancegen_generate::systems::solo::{SoloOptions, SoloSampler};
+use dancegen_generate::{CancelToken, Generator, ModelLocator, Progress, Request, Song};
+use dancegen_generate::{SystemRequest, systems};
 
-use crate::cli::{GenerateArgs, SamplerArg};
-use crate::demo::song_or_demo;
-use crate::progress::spinner;
-
-/// The model shipped in the repository (`models/lodgepp-small`).
-pub fn default_model_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/lodgepp-small")
-}
-
-/// Shortest song the model accepts (one PDDM window needs material to dance to).
-const MIN_SONG_SECONDS: f64 = 2.0;
-/// Motion frame rate (EDGE / Lodge++ / ReactDance).
-pub(crate) const FPS: u32 = 30;
-/// Preview size.
-const PREVIEW_WIDTH: u32 = 640;
-const PREVIEW_HEIGHT: u32 = 480;
-/// GIF preview frame rate.
-const GIF_FPS: f32 = 15.0;
-
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(crate) enum Out {
-    Motion,
-    Gif,
-    Mp4,
-}
-
-pub(crate) fn kind_of(p: &Path) -> Result<Out> {
-    let ext = p
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    Ok(match ext.as_str() {
-        "glb" | "bvh" | "npz" | "npy" | "json" => Out::Motion,
-        "gif" => Out::Gif,
-        "mp4" => Out::Mp4,
-        other => bail!(
-            "{}: unknown output format '.{other}' (use .glb, .bvh, .npz, .npy, .json, .gif or .mp4)",
-            p.display()
-        ),
-    })
-}
+use crate::cli::{GenerateArgs, ProgressArg, SamplerArg};
+use crate::progress::JobProgress;
 
 pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
-    if args.leader.is_some() {
-        return crate::cmd_generate_duet::run(args, quiet);
-    }
-    let outputs: Vec<PathBuf> = if args.output.is_empty() {
-        vec![PathBuf::from("dance.glb")]
-    } else {
-        args.output.clone()
-    };
-    let kinds: Vec<Out> = outputs.iter().map(|p| kind_of(p)).collect::<Result<_>>()?;
-    if kinds.contains(&Out::Mp4) && !write::ffmpeg_available() {
-        bail!(dancegen_render::RenderError::FfmpegMissing);
-    }
-    if let Some(w) = args.guidance
-        && !(w.is_finite() && w >= 0.0)
-    {
-        bail!("--guidance {w}: use a non-negative number (1 = no guidance, 2 = Lodge's default)");
-    }
-    if args.steps == Some(0) {
-        bail!("--steps must be at least 1");
-    }
-    let started = Instant::now();
-    let device = dancegen_nn_device();
-    let model_dir = args.model.clone().unwrap_or_else(default_model_dir);
-    let pb = spinner("loading the model", quiet);
-    let model = SoloModel::load(&model_dir, &device).with_context(|| {
-        format!(
-            "loading the Lodge++ model in {} (give another with --model DIR)",
-            model_dir.display()
-        )
-    })?;
-    let genre_name = args
-        .genre
-        .clone()
-        .unwrap_or_else(|| model.config.default_genre.clone());
-    let genre = model.genre_index(&genre_name).map_err(anyhow::Error::msg)?;
-    pb.finish_and_clear();
-
-    let (source, label, feats) = analyse_song(args.song.as_ref(), quiet)?;
-    let total = feats.features.rows;
-    // librosa-style framing has a frame at both ends (1 + samples / hop rows): a song of
-    // d seconds has d · 30 frame intervals, and the dance gets that many frames.
-    let song_seconds = total.saturating_sub(1) as f64 / f64::from(FPS);
-    let start = args.start.unwrap_or(0.0);
-    let end = args.end.unwrap_or(song_seconds).min(song_seconds);
-    if !(start.is_finite() && end.is_finite() && start >= 0.0 && start < end) {
-        bail!(
-            "--start {start} / --end {end}: need 0 ≤ start < end ≤ the song's {song_seconds:.2} s"
-        );
-    }
-    if end - start < MIN_SONG_SECONDS {
-        bail!(
-            "{label}: {:.2} s of music to dance to; the model needs at least {MIN_SONG_SECONDS} s",
-            end - start
-        );
-    }
-    let (f0, f1) = (
-        (start * f64::from(FPS)).round() as usize,
-        ((end * f64::from(FPS)).round() as usize).min(total),
-    );
-    let cols = feats.features.cols;
-    let music = feats.features.data[f0 * cols..f1 * cols].to_vec();
-    let beats: Vec<usize> = feats
-        .beat_frames
-        .iter()
-        .filter(|&&b| b >= f0 && b < f1)
-        .map(|&b| b - f0)
-        .collect();
-
-    let mut opts = GenerateOptions::defaults(&model, genre, args.seed);
-    if let Some(s) = args.steps {
-        opts.steps = s;
-    }
-    if let Some(w) = args.guidance {
-        opts.guidance = w;
-    }
-    opts.sampler = match args.sampler.unwrap_or(SamplerArg::Lodgepp) {
-        SamplerArg::Lodgepp => Sampler::Lodgepp,
-        SamplerArg::Edge => Sampler::Edge,
-        SamplerArg::Autoregressive => Sampler::Autoregressive,
-        SamplerArg::Blc => bail!("--sampler blc is the duet sampler (use it with --leader)"),
-    };
-    opts.refine = !args.no_foot_refine;
-    if args.no_penetration_guidance {
-        opts.penetration = None;
-    }
-    if args.no_foot_lock {
-        opts.foot_lock = false;
-    }
-    let pb = spinner(
-        &format!("dancing {:.1} s of {label} ({genre_name})", end - start),
-        quiet,
-    );
-    let t_gen = Instant::now();
-    let grad_device = device.clone().autodiff();
-    let dance = model.generate(&music, &beats, &opts, &device, &grad_device);
-    let gen_secs = t_gen.elapsed().as_secs_f64();
-    pb.finish_and_clear();
-    tracing::info!(
-        horizontal_m = dance.seam_correction.horizontal,
-        height_m = dance.seam_correction.height,
-        "largest root corrections where generated frames meet the shared boundary frames"
-    );
-    let motion = to_smpl(&dance.frames)?;
-
-    for (path, kind) in outputs.iter().zip(&kinds) {
-        match kind {
-            Out::Motion => save_motion_file(
-                path,
-                &LoadedMotion::Smpl(motion.clone()),
-                &ConvertOptions::default(),
-            )?,
-            Out::Gif | Out::Mp4 => {
-                let audio = if *kind == Out::Mp4 {
-                    Some(song_segment_wav(&source, start, end)?)
-                } else {
-                    None
-                };
-                preview_motion(
-                    path,
-                    LoadedMotion::Smpl(motion.clone()),
-                    *kind,
-                    audio.as_ref().map(|t| t.path()),
-                )?;
-            }
-        }
-    }
+    let request = request(args)?;
+    let generator = Generator::new(ModelLocator::from_environment());
+    let bar = JobProgress::new(match args.progress {
+        ProgressArg::Bar if !quiet => ProgressArg::Bar,
+        ProgressArg::Bar => ProgressArg::None,
+        other => other,
+    });
+    let on_progress = |p: &Progress| bar.report(p);
+    let done = generator.run(&request, &on_progress, &CancelToken::new());
+    bar.finish();
+    let done = done?;
     if !quiet {
         let mut out = std::io::stdout().lock();
+        let notes: String = done.notes.iter().map(|n| format!("; {n}")).collect();
         writeln!(
             out,
-            "{label}: {} frames ({:.1} s at {FPS} fps), genre {genre_name}, seed {}, {} windows, \
-             {} key motions; generated in {gen_secs:.2} s ({:.2} s in total)",
-            dance.n_frames,
-            dance.n_frames as f64 / f64::from(FPS),
-            args.seed,
-            dance.windows,
-            dance.key_motions,
-            started.elapsed().as_secs_f64()
+            "{}: {}; generated in {:.2} s ({}{:.2} s in total){notes}",
+            done.song_label,
+            done.summary,
+            done.timings.generate_s,
+            done.timing_breakdown,
+            done.timings.total_s,
         )?;
-        for p in &outputs {
+        for p in &done.written {
             writeln!(out, "  -> {}", p.display())?;
         }
     }
     Ok(())
 }
 
-fn dancegen_nn_device() -> dancegen_lodgepp::Device {
-    dancegen_lodgepp::inference_device()
-}
-
-/// The song (or the bundled demo), its label and its EDGE-35 features at 30 fps over the whole
-/// song (both generators slice what they dance to from them).
-pub(crate) fn analyse_song(
-    song: Option<&PathBuf>,
-    quiet: bool,
-) -> Result<(AudioSource, String, dancegen_music::features::MusicFeatures)> {
-    let source = song_or_demo(song);
-    let label = source.label().display().to_string();
-    let pb = spinner(&format!("analysing {label}"), quiet);
-    let feats = extract(
-        &source,
-        &ExtractOptions {
-            fps: FPS,
-            set: FeatureSet::Edge35,
-            start_bpm: None,
-        },
-    )?;
-    pb.finish_and_clear();
-    Ok((source, label, feats))
-}
-
-/// Raw EDGE-151 frames → SMPL motion standing on the floor: the supporting foot at y = 0 and
-/// no frame with a foot below it.
-fn to_smpl(frames: &[f32]) -> Result<SmplMotion> {
-    if frames.iter().any(|v| !v.is_finite()) {
-        bail!("the model produced non-finite values (please report this with the song and seed)");
-    }
-    let mut m = Edge151::decode(frames)?;
-    m.put_on_ground_with(GroundMode::SupportFeet)?;
-    let joints = m.joints_world()?;
-    for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
-        let low = dancegen_motion::repr::motion::FOOT_JOINTS
-            .iter()
-            .map(|&j| joints[(f * 24 + j) * 3 + 1])
-            .fold(f32::INFINITY, f32::min);
-        if low < 0.0 {
-            p[1] -= low;
-        }
-    }
-    Ok(m)
-}
-
-/// The song between `start` and `end` seconds as a temporary mono 16-bit WAV (for the MP4).
-pub(crate) fn song_segment_wav(
-    source: &AudioSource,
-    start: f64,
-    end: f64,
-) -> Result<tempfile::NamedTempFile> {
-    let audio = dancegen_music::load::load_many(source, &[0], |_| {})?
-        .into_iter()
-        .next()
-        .context("decoding the song for the preview")?;
-    let sr = audio.sample_rate;
-    let a = ((start * f64::from(sr)) as usize).min(audio.samples.len());
-    let b = ((end * f64::from(sr)) as usize).min(audio.samples.len());
-    let tmp = tempfile::Builder::new().suffix(".wav").tempfile()?;
-    let spec = hound::WavSpec {
-        channels: 1,
-        sample_rate: sr,
-        bits_per_sample: 16,
-        sample_format: hound::SampleFormat::Int,
+/// The library request the flags describe.
+fn request(args: &GenerateArgs) -> Result<Request> {
+    let system = match (args.system.as_deref(), &args.leader) {
+        (None, None) => "solo",
+        (None, Some(_)) => "duet",
+        (Some(s), _) => s,
     };
-    let mut w = hound::WavWriter::create(tmp.path(), spec)?;
-    for &s in &audio.samples[a..b] {
-        w.write_sample((s.clamp(-1.0, 1.0) * 32767.0) as i16)?;
-    }
-    w.finalize()?;
-    Ok(tmp)
+    let info = systems::by_name(system).map_err(anyhow::Error::msg)?;
+    let system = match (info.name, &args.leader) {
+        ("solo", Some(_)) => {
+            bail!("--leader makes a duet; use --system duet (or leave --system out)")
+        }
+        ("solo", None) => SystemRequest::Solo(solo_options(args)?),
+        ("duet", Some(leader)) => SystemRequest::Duet(duet_options(args, leader)?),
+        ("duet", None) => bail!("the duet system dances with a leader: give --leader FILE"),
+        (other, _) => bail!("--system {other} is not wired into this command yet"),
+    };
+    let duet = matches!(system, SystemRequest::Duet(_));
+    let outputs: Vec<PathBuf> = if args.output.is_empty() {
+        vec![PathBuf::from(if duet { "couple.glb" } else { "dance.glb" })]
+    } else {
+        args.output.clone()
+    };
+    let dancers = if args.follower_only {
+        DancerSelection::Generated
+    } else {
+        DancerSelection::Auto
+    };
+    Ok(Request {
+        song: Song::file_or_demo(args.song.as_deref()),
+        system,
+        common: CommonOptions {
+            seed: args.seed,
+            steps: args.steps,
+            guidance: args.guidance,
+            genre: args.genre.clone(),
+            start: args.start,
+            end: args.end,
+        },
+        model: args.model.clone(),
+        outputs: outputs
+            .into_iter()
+            .map(|path| OutputRequest { path, dancers })
+            .collect(),
+    })
 }
 
-pub(crate) fn preview_motion(
-    path: &Path,
-    loaded: LoadedMotion,
-    kind: Out,
-    audio: Option<&Path>,
-) -> Result<()> {
-    let tracks = tracks_from_motion(path, &loaded)?;
-    let opts = RenderOptions::new(PREVIEW_WIDTH, PREVIEW_HEIGHT);
-    let scene = Scene::new(&tracks, &opts)?;
-    match kind {
-        Out::Gif => {
-            write::write_gif(path, scene.stream(GIF_FPS), GIF_FPS)?;
+fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {
+    let sampler = match args.sampler.unwrap_or(SamplerArg::Lodgepp) {
+        SamplerArg::Lodgepp => SoloSampler::Lodgepp,
+        SamplerArg::Edge => SoloSampler::Edge,
+        SamplerArg::Autoregressive => SoloSampler::Autoregressive,
+        SamplerArg::Blc => bail!("--sampler blc is the duet sampler (use it with --leader)"),
+    };
+    Ok(SoloOptions {
+        sampler,
+        foot_refine: !args.no_foot_refine,
+        penetration_guidance: !args.no_penetration_guidance,
+        foot_lock: !args.no_foot_lock,
+    })
+}
+
+fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOptions> {
+    let sampler = match args.sampler.unwrap_or(SamplerArg::Blc) {
+        SamplerArg::Blc => DuetSampler::Blc,
+        SamplerArg::Autoregressive => DuetSampler::Autoregressive,
+        other => {
+            bail!("--sampler {other:?} is a solo sampler; with --leader use blc or autoregressive")
         }
-        _ => {
-            write::write_mp4(
-                path,
-                scene.stream(FPS as f32),
-                PREVIEW_WIDTH,
-                PREVIEW_HEIGHT,
-                FPS as f32,
-                audio,
-            )?;
-        }
-    }
-    Ok(())
+    };
+    let motion = load_leader(leader)?;
+    Ok(DuetOptions {
+        sampler,
+        guidance_coarse: args.guidance_coarse,
+        guidance_fine: args.guidance_fine,
+        guidance_levels: args.guidance_levels.clone(),
+        separation: !args.no_separation,
+        ..DuetOptions::new(motion, leader.display().to_string())
+    })
 }

@@ -7,10 +7,9 @@ mod cmd_convert;
 mod cmd_dataset;
 mod cmd_features;
 mod cmd_generate;
-mod cmd_generate_duet;
+mod cmd_models;
 mod cmd_render;
 mod cmd_train;
-mod demo;
 mod eval;
 mod plot;
 mod progress;
@@ -36,6 +35,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Dataset(cmd) => cmd_dataset::run(cmd, cli.quiet),
         cli::Command::Generate(args) => cmd_generate::run(args, cli.quiet),
         cli::Command::Bundle(args) => cmd_bundle::run(args, cli.quiet),
+        cli::Command::Models(args) => cmd_models::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

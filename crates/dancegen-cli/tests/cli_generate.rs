@@ -249,3 +249,63 @@ fn five_minute_song_full_length_on_stage() {
         "left the 6 m stage"
     );
 }
+
+#[test]
+fn json_progress_grows_to_one_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.npy");
+    let o = dancegen(&[
+        "generate",
+        &song(),
+        "--start",
+        "5",
+        "--end",
+        "9",
+        "--steps",
+        "3",
+        "--progress",
+        "json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let reports: Vec<serde_json::Value> = stderr(&o)
+        .lines()
+        .filter(|l| l.starts_with('{'))
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect();
+    assert!(reports.len() > 5, "{reports:?}");
+    let fractions: Vec<f64> = reports
+        .iter()
+        .map(|r| r["fraction"].as_f64().unwrap())
+        .collect();
+    assert!(fractions.windows(2).all(|w| w[1] >= w[0]), "{fractions:?}");
+    let last = reports.last().unwrap();
+    assert_eq!(last["fraction"].as_f64(), Some(1.0));
+    assert_eq!(last["stage"], "done");
+    for r in &reports {
+        assert!(r["stage"].is_string() && r.get("eta_s").is_some(), "{r}");
+    }
+    assert!(reports.iter().any(|r| r["stage"] == "denoising"));
+    // The stdout summary is unchanged by the progress mode.
+    let said = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        said.contains("generated in") && said.contains("p.npy"),
+        "{said}"
+    );
+}
+
+#[test]
+fn systems_are_chosen_by_name_with_clear_errors() {
+    let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "group"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("group") && e.contains("solo, duet"), "{e}");
+    let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "polka"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("solo") && e.contains("holistic"), "{e}");
+    let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "duet"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--leader"), "{}", stderr(&o));
+}

@@ -1,0 +1,215 @@
+//! The generator: runs one [`Request`] as a job, keeping loaded models between jobs.
+
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use dancegen_nn::burn::tensor::Device;
+
+use crate::error::GenerateError;
+use crate::models::ModelLocator;
+use crate::output;
+use crate::progress::{CancelToken, Progress, Tracker, stage};
+use crate::request::{Request, SystemRequest};
+use crate::song::{AnalysedSong, FPS};
+use crate::system::{Dance, DanceInput, DanceSystem, Dancer};
+use crate::systems::duet::Duet;
+use crate::systems::solo::Solo;
+
+/// Where a job's time went (seconds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Timings {
+    pub load_model_s: f64,
+    pub analyse_song_s: f64,
+    /// The system itself (sampling, decoding, post-processing).
+    pub generate_s: f64,
+    pub write_outputs_s: f64,
+    pub total_s: f64,
+}
+
+/// A finished job.
+#[derive(Clone, Debug)]
+pub struct Generated {
+    /// `"solo"`, `"duet"`.
+    pub system: &'static str,
+    /// The model folder used.
+    pub model_dir: PathBuf,
+    /// The song's path or name.
+    pub song_label: String,
+    pub dancers: Vec<Dancer>,
+    /// Motion frame rate.
+    pub fps: u32,
+    /// Seconds of the song danced to.
+    pub start_s: f64,
+    pub end_s: f64,
+    /// Music beats in the danced part, seconds from its start.
+    pub beat_times_s: Vec<f64>,
+    pub tempo_bpm: f64,
+    /// The system's account of what it made ([`Dance::summary`] and friends).
+    pub summary: String,
+    pub timing_breakdown: String,
+    pub notes: Vec<String>,
+    pub timings: Timings,
+    /// Files written, in request order.
+    pub written: Vec<PathBuf>,
+}
+
+/// Runs generation jobs. Long-running front ends (the web server, batch runs) keep one and
+/// reuse its loaded models; it is `Sync`, and jobs may run from several threads.
+pub struct Generator {
+    locator: ModelLocator,
+    device: Device,
+    /// Loaded models by system and canonical folder.
+    models: Mutex<HashMap<(TypeId, PathBuf), Arc<dyn Any + Send + Sync>>>,
+}
+
+impl Generator {
+    /// A generator finding models on `locator`'s path, on the inference device.
+    pub fn new(locator: ModelLocator) -> Self {
+        Generator {
+            locator,
+            device: dancegen_nn::device::inference(),
+            models: Mutex::new(HashMap::new()),
+        }
+    }
+
+    pub fn locator(&self) -> &ModelLocator {
+        &self.locator
+    }
+
+    /// Runs `request`: `on_progress` hears of every stage and step (fractions only grow, the
+    /// last report is `done` at 1.0); `cancel` stops the job between steps, and a cancelled
+    /// or failed job leaves no output file.
+    pub fn run(
+        &self,
+        request: &Request,
+        on_progress: &(dyn Fn(&Progress) + Sync),
+        cancel: &CancelToken,
+    ) -> Result<Generated, GenerateError> {
+        match &request.system {
+            SystemRequest::Solo(o) => self.run_system::<Solo>(request, o, on_progress, cancel),
+            SystemRequest::Duet(o) => self.run_system::<Duet>(request, o, on_progress, cancel),
+        }
+    }
+
+    /// The model in `dir` for `S`, loaded once per generator.
+    fn model<S: DanceSystem>(&self, dir: &Path) -> Result<(Arc<S::Model>, bool), GenerateError> {
+        let key = (
+            TypeId::of::<S>(),
+            dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf()),
+        );
+        if let Some(m) = self.lock_models().get(&key).cloned()
+            && let Ok(m) = m.downcast::<S::Model>()
+        {
+            return Ok((m, true));
+        }
+        // Loaded outside the lock: another job may load another model meanwhile (a second
+        // load of the same one only costs time).
+        let m = Arc::new(S::load(dir, &self.device)?);
+        self.lock_models().insert(key, m.clone());
+        Ok((m, false))
+    }
+
+    fn lock_models(
+        &self,
+    ) -> std::sync::MutexGuard<'_, HashMap<(TypeId, PathBuf), Arc<dyn Any + Send + Sync>>> {
+        self.models.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn is_cached<S: DanceSystem>(&self, dir: &Path) -> bool {
+        let key = (
+            TypeId::of::<S>(),
+            dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf()),
+        );
+        self.lock_models().contains_key(&key)
+    }
+
+    fn run_system<S: DanceSystem>(
+        &self,
+        request: &Request,
+        options: &S::Options,
+        on_progress: &(dyn Fn(&Progress) + Sync),
+        cancel: &CancelToken,
+    ) -> Result<Generated, GenerateError> {
+        let started = Instant::now();
+        let planned = output::plan(&request.outputs)?;
+        let model_dir = match &request.model {
+            Some(d) => d.clone(),
+            None => self.locator.find(S::DEFAULT_MODEL, S::NAME)?,
+        };
+        // Shares of the job in rough seconds on 2 cores (the ETA extrapolates from the real
+        // time spent, so these only need to be in proportion).
+        let load_share = if self.is_cached::<S>(&model_dir) {
+            0.0
+        } else {
+            0.5
+        };
+        let mut plan = vec![(stage::LOAD_MODEL, load_share), (stage::ANALYSE_SONG, 1.5)];
+        const GENERATE_SECONDS: f64 = 4.0;
+        plan.extend(S::PARTS.iter().map(|&(p, w)| (p, w * GENERATE_SECONDS)));
+        plan.push((stage::WRITE_OUTPUTS, output::estimated_seconds(&planned)));
+        let tracker = Tracker::new(plan, on_progress, cancel);
+
+        tracker.begin(stage::LOAD_MODEL)?;
+        let t = Instant::now();
+        let (model, _) = self.model::<S>(&model_dir)?;
+        let load_model_s = t.elapsed().as_secs_f64();
+        S::check(&model, &request.common, options)?;
+
+        tracker.begin(stage::ANALYSE_SONG)?;
+        let t = Instant::now();
+        let song = AnalysedSong::analyse(&request.song)?;
+        let analyse_song_s = t.elapsed().as_secs_f64();
+        tracker.advance(stage::ANALYSE_SONG, 1, 1);
+        tracker.check()?;
+
+        let t = Instant::now();
+        let dance: Dance = S::dance(
+            &model,
+            DanceInput {
+                song: &song,
+                common: &request.common,
+                options,
+                device: &self.device,
+                hook: &tracker,
+            },
+        )?;
+        let generate_s = t.elapsed().as_secs_f64();
+
+        tracker.begin(stage::WRITE_OUTPUTS)?;
+        let t = Instant::now();
+        let written = output::write_all(&planned, &dance, &song, &tracker)?;
+        let write_outputs_s = t.elapsed().as_secs_f64();
+        tracker.finish();
+
+        let span = dance.span;
+        Ok(Generated {
+            system: S::NAME,
+            model_dir,
+            song_label: song.label.clone(),
+            fps: FPS,
+            start_s: span.start_s,
+            end_s: span.end_s,
+            beat_times_s: song
+                .beat_frames(&span)
+                .into_iter()
+                .map(|f| f as f64 / f64::from(FPS))
+                .collect(),
+            tempo_bpm: song.features.tempo_bpm,
+            dancers: dance.dancers,
+            summary: dance.summary,
+            timing_breakdown: dance.timing_breakdown,
+            notes: dance.notes,
+            timings: Timings {
+                load_model_s,
+                analyse_song_s,
+                generate_s,
+                write_outputs_s,
+                total_s: started.elapsed().as_secs_f64(),
+            },
+            written,
+        })
+    }
+}

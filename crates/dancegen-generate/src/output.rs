@@ -1,0 +1,320 @@
+//! Every output format a dance can be written to, chosen by extension, and the staging that
+//! makes a job's outputs appear all together or not at all.
+//!
+//! Motion files go through `dancegen_motion::formats::save_motion_file`; previews are drawn
+//! by `dancegen_render` (MP4 with the danced part of the song as its sound track). Every file
+//! is first written into a hidden staging folder next to its destination and renamed into
+//! place only after all of them are complete, so a failed or cancelled job leaves no file
+//! and never replaces an existing one with half a dance.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
+use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
+
+use crate::error::GenerateError;
+use crate::progress::{Tracker, stage};
+use crate::request::{DancerSelection, OutputRequest};
+use crate::song::{AnalysedSong, FPS};
+use crate::system::Dance;
+
+/// Preview image size.
+pub const PREVIEW_WIDTH: u32 = 640;
+pub const PREVIEW_HEIGHT: u32 = 480;
+/// GIF preview frame rate (half the motion's, to keep the file small).
+pub const GIF_FPS: f32 = 15.0;
+
+/// A file format, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// glTF binary: skinned skeletons with the animation (Blender, Unity, Unreal, three.js).
+    Glb,
+    Bvh,
+    /// SMPL parameters (AMASS-style npz).
+    Npz,
+    /// World joints `(T, 24, 3)`, metres, Y-up, 30 fps.
+    Npy,
+    /// Joint names, parents and world positions.
+    Json,
+    Gif,
+    /// Preview with the song.
+    Mp4,
+}
+
+impl OutputFormat {
+    pub const ALL: [OutputFormat; 7] = [
+        OutputFormat::Glb,
+        OutputFormat::Bvh,
+        OutputFormat::Npz,
+        OutputFormat::Npy,
+        OutputFormat::Json,
+        OutputFormat::Gif,
+        OutputFormat::Mp4,
+    ];
+
+    pub fn extension(self) -> &'static str {
+        match self {
+            OutputFormat::Glb => "glb",
+            OutputFormat::Bvh => "bvh",
+            OutputFormat::Npz => "npz",
+            OutputFormat::Npy => "npy",
+            OutputFormat::Json => "json",
+            OutputFormat::Gif => "gif",
+            OutputFormat::Mp4 => "mp4",
+        }
+    }
+
+    /// The format of `path`, or an error listing the formats.
+    pub fn of(path: &Path) -> Result<Self, GenerateError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        Self::ALL
+            .into_iter()
+            .find(|f| f.extension() == ext)
+            .ok_or_else(|| GenerateError::Output {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "unknown output format '.{ext}' (use .glb, .bvh, .npz, .npy, .json, .gif or \
+                     .mp4)"
+                ),
+            })
+    }
+
+    /// Whether one file can hold several dancers (a couple, a group).
+    pub fn holds_many_dancers(self) -> bool {
+        matches!(
+            self,
+            OutputFormat::Glb | OutputFormat::Json | OutputFormat::Gif | OutputFormat::Mp4
+        )
+    }
+
+    pub fn is_preview(self) -> bool {
+        matches!(self, OutputFormat::Gif | OutputFormat::Mp4)
+    }
+}
+
+/// An output request whose format and destination have been checked.
+pub(crate) struct PlannedOutput {
+    pub request: OutputRequest,
+    pub format: OutputFormat,
+}
+
+/// Checks every output before any work is done: known format, an existing folder, no file
+/// named twice, ffmpeg present for MP4.
+pub(crate) fn plan(outputs: &[OutputRequest]) -> Result<Vec<PlannedOutput>, GenerateError> {
+    let mut seen = HashSet::new();
+    let mut planned = Vec::with_capacity(outputs.len());
+    for r in outputs {
+        let format = OutputFormat::of(&r.path)?;
+        let dir = parent_dir(&r.path);
+        if !dir.is_dir() {
+            return Err(GenerateError::Output {
+                path: r.path.clone(),
+                reason: format!("the folder {} does not exist", dir.display()),
+            });
+        }
+        if !seen.insert(r.path.clone()) {
+            return Err(GenerateError::Output {
+                path: r.path.clone(),
+                reason: "named twice as an output".into(),
+            });
+        }
+        planned.push(PlannedOutput {
+            request: r.clone(),
+            format,
+        });
+    }
+    if planned.iter().any(|p| p.format == OutputFormat::Mp4) && !write::ffmpeg_available() {
+        return Err(dancegen_render::RenderError::FfmpegMissing.into());
+    }
+    Ok(planned)
+}
+
+/// Rough cost of the writing, in the units [`write_all`] reports: frames for previews and
+/// [`MOTION_FILE_UNITS`] for a motion file.
+pub(crate) fn estimated_seconds(planned: &[PlannedOutput]) -> f64 {
+    // A motion file takes tens of milliseconds; a 45 s preview a few seconds on 2 cores.
+    planned
+        .iter()
+        .map(|p| if p.format.is_preview() { 4.0 } else { 0.1 })
+        .sum()
+}
+
+/// Progress units of one motion file (a preview counts its frames).
+const MOTION_FILE_UNITS: usize = 10;
+
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// The dancers `format` gets under `selection`, as one motion.
+fn select(
+    dance: &Dance,
+    selection: DancerSelection,
+    format: OutputFormat,
+    path: &Path,
+) -> Result<LoadedMotion, GenerateError> {
+    let generated: Vec<_> = dance
+        .dancers
+        .iter()
+        .filter(|d| d.role.generated())
+        .collect();
+    let chosen: Vec<_> = if format.holds_many_dancers() && selection == DancerSelection::Auto {
+        dance.dancers.iter().collect()
+    } else {
+        generated
+    };
+    match chosen.as_slice() {
+        [] => Err(GenerateError::Output {
+            path: path.to_path_buf(),
+            reason: "the dance has no generated dancer to write".into(),
+        }),
+        [one] => Ok(LoadedMotion::Smpl(one.motion.clone())),
+        many if format.holds_many_dancers() => Ok(LoadedMotion::Group(
+            many.iter().map(|d| d.motion.clone()).collect(),
+        )),
+        many => Err(GenerateError::Output {
+            path: path.to_path_buf(),
+            reason: format!(
+                "a .{} holds one dancer and this dance has {}; write .glb or .json for all of them",
+                format.extension(),
+                many.len()
+            ),
+        }),
+    }
+}
+
+/// Hidden folders next to the destinations that hold the outputs until all are written.
+#[derive(Default)]
+struct Staging {
+    dirs: Vec<tempfile::TempDir>,
+    moves: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Staging {
+    /// Where to write `dest` for now.
+    fn path_for(&mut self, dest: &Path) -> Result<PathBuf, GenerateError> {
+        let dir = tempfile::Builder::new()
+            .prefix(".dancegen-")
+            .tempdir_in(parent_dir(dest))
+            .map_err(|e| GenerateError::Output {
+                path: dest.to_path_buf(),
+                reason: format!("cannot create a staging folder next to it: {e}"),
+            })?;
+        let name = dest.file_name().ok_or_else(|| GenerateError::Output {
+            path: dest.to_path_buf(),
+            reason: "not a file name".into(),
+        })?;
+        let tmp = dir.path().join(name);
+        self.dirs.push(dir);
+        self.moves.push((tmp.clone(), dest.to_path_buf()));
+        Ok(tmp)
+    }
+
+    /// Renames every staged file into place; the staging folders go when `self` drops.
+    fn commit(self) -> Result<Vec<PathBuf>, GenerateError> {
+        let mut written = Vec::with_capacity(self.moves.len());
+        for (tmp, dest) in &self.moves {
+            std::fs::rename(tmp, dest).map_err(|e| GenerateError::Output {
+                path: dest.clone(),
+                reason: e.to_string(),
+            })?;
+            written.push(dest.clone());
+        }
+        Ok(written)
+    }
+}
+
+/// An error about the staging copy `tmp`, told about `dest`.
+fn about_dest(e: impl std::fmt::Display, tmp: &Path, dest: &Path) -> GenerateError {
+    let text = e
+        .to_string()
+        .replace(&tmp.display().to_string(), &dest.display().to_string());
+    let prefix = format!("{}: ", dest.display());
+    GenerateError::Output {
+        path: dest.to_path_buf(),
+        reason: text.strip_prefix(&prefix).unwrap_or(&text).to_string(),
+    }
+}
+
+/// Writes every planned output of `dance`, reporting progress under `write_outputs` and
+/// stopping (leaving nothing) when the job is cancelled. Returns the paths written.
+pub(crate) fn write_all(
+    planned: &[PlannedOutput],
+    dance: &Dance,
+    song: &AnalysedSong,
+    tracker: &Tracker<'_>,
+) -> Result<Vec<PathBuf>, GenerateError> {
+    let fps = FPS as f32;
+    let units: Vec<usize> = planned
+        .iter()
+        .map(|p| match p.format {
+            OutputFormat::Gif => frame_count(dance, GIF_FPS),
+            OutputFormat::Mp4 => frame_count(dance, fps),
+            _ => MOTION_FILE_UNITS,
+        })
+        .collect();
+    let total: usize = units.iter().sum();
+    let mut done = 0usize;
+    let mut staging = Staging::default();
+    for (p, &n) in planned.iter().zip(&units) {
+        tracker.check()?;
+        let dest = &p.request.path;
+        let tmp = staging.path_for(dest)?;
+        let motion = select(dance, p.request.dancers, p.format, dest)?;
+        if p.format.is_preview() {
+            let tracks = tracks_from_motion(dest, &motion)?;
+            let scene = Scene::new(&tracks, &RenderOptions::new(PREVIEW_WIDTH, PREVIEW_HEIGHT))?;
+            let base = done;
+            // Frames stop coming once the job is cancelled; the short file is then dropped
+            // with the staging folder.
+            let frames = |rate: f32| {
+                scene.stream(rate).enumerate().map_while(move |(i, img)| {
+                    tracker.advance(stage::WRITE_OUTPUTS, base + i + 1, total);
+                    tracker.check().is_ok().then_some(img)
+                })
+            };
+            let written = if p.format == OutputFormat::Gif {
+                write::write_gif(&tmp, frames(GIF_FPS), GIF_FPS)
+            } else {
+                let audio =
+                    crate::song::segment_wav(&song.source, dance.span.start_s, dance.span.end_s)?;
+                write::write_mp4(
+                    &tmp,
+                    frames(fps),
+                    PREVIEW_WIDTH,
+                    PREVIEW_HEIGHT,
+                    fps,
+                    Some(audio.path()),
+                )
+            };
+            written.map_err(|e| about_dest(e, &tmp, dest))?;
+        } else {
+            save_motion_file(&tmp, &motion, &ConvertOptions::default())
+                .map_err(|e| about_dest(e, &tmp, dest))?;
+        }
+        done += n;
+        tracker.advance(stage::WRITE_OUTPUTS, done, total);
+    }
+    tracker.check()?;
+    staging.commit()
+}
+
+/// Preview frames of `dance` at `fps` (the render scene's count for the longest dancer).
+fn frame_count(dance: &Dance, fps: f32) -> usize {
+    let frames = dance
+        .dancers
+        .iter()
+        .map(|d| d.motion.frames())
+        .max()
+        .unwrap_or(0);
+    let seconds = frames.saturating_sub(1) as f32 / FPS as f32;
+    (seconds * fps + 1e-3).floor() as usize + 1
+}

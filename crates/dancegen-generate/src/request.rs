@@ -1,0 +1,98 @@
+//! What a front end asks for: one [`Request`] per dance, whatever the system.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use crate::systems::duet::DuetOptions;
+use crate::systems::solo::SoloOptions;
+
+/// Where the song comes from.
+#[derive(Clone, Debug)]
+pub enum Song {
+    /// The bundled demo song (45 s of *Metal Madness*, compiled into the library).
+    Demo,
+    File(PathBuf),
+    /// Bytes in memory (an upload); `name` is shown in messages and its extension is the
+    /// format hint.
+    Bytes {
+        name: String,
+        bytes: Arc<[u8]>,
+    },
+}
+
+impl Song {
+    /// The file, or the demo song when there is none (what every command does without a
+    /// song argument).
+    pub fn file_or_demo(path: Option<&std::path::Path>) -> Self {
+        match path {
+            Some(p) => Song::File(p.to_path_buf()),
+            None => Song::Demo,
+        }
+    }
+}
+
+/// The system that dances, with its own options. Adding a system adds a variant here and
+/// its module in [`crate::systems`]; the existing systems are not touched.
+#[derive(Clone, Debug)]
+pub enum SystemRequest {
+    /// One dancer (Lodge++).
+    Solo(SoloOptions),
+    /// The partner of a given leader (ReactDance).
+    Duet(DuetOptions),
+}
+
+/// Options every system understands; `None` means the model's default.
+#[derive(Clone, Debug, Default)]
+pub struct CommonOptions {
+    pub seed: u64,
+    /// Denoising steps.
+    pub steps: Option<usize>,
+    /// Classifier-free guidance weight `w` (1 = conditional only).
+    pub guidance: Option<f64>,
+    /// Dance genre (the model's list).
+    pub genre: Option<String>,
+    /// Start of the music to dance to (seconds).
+    pub start: Option<f64>,
+    /// End of the music to dance to (seconds).
+    pub end: Option<f64>,
+}
+
+/// Which dancers an output file holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DancerSelection {
+    /// Every dancer where the format holds several (`.glb`, `.json`, previews), the generated
+    /// dancer in single-dancer formats (`.bvh`, `.npz`, `.npy`).
+    #[default]
+    Auto,
+    /// Only the generated dancers (a duet's follower without its given leader).
+    Generated,
+}
+
+/// One file to write; the format comes from the extension ([`crate::output::OutputFormat`]).
+#[derive(Clone, Debug)]
+pub struct OutputRequest {
+    pub path: PathBuf,
+    pub dancers: DancerSelection,
+}
+
+impl OutputRequest {
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        OutputRequest {
+            path: path.into(),
+            dancers: DancerSelection::Auto,
+        }
+    }
+}
+
+/// One dance to generate.
+#[derive(Clone, Debug)]
+pub struct Request {
+    pub song: Song,
+    pub system: SystemRequest,
+    pub common: CommonOptions,
+    /// A model directory; `None` finds the system's default model on the search path
+    /// ([`crate::models::ModelLocator`]).
+    pub model: Option<PathBuf>,
+    /// Files to write (none: the dance is only returned).
+    pub outputs: Vec<OutputRequest>,
+}

@@ -1,0 +1,164 @@
+//! The song, analysed once per job: EDGE-35 features and beats at 30 fps over the whole song
+//! (every system slices what it dances to from them).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use dancegen_music::decode::AudioSource;
+use dancegen_music::features::{ExtractOptions, FeatureSet, MusicFeatures, extract};
+
+use crate::error::GenerateError;
+use crate::request::Song;
+
+/// Motion and feature frame rate of every shipped system (EDGE / Lodge++ / ReactDance).
+pub const FPS: u32 = 30;
+
+/// 45 s of "Metal Madness" by Carlos Viola Iborra (Sectoid song pack, MIT-style licence; see
+/// NOTICE), re-encoded as OGG/Vorbis q4.
+const DEMO_SONG: &[u8] = include_bytes!("../../../assets/demo_metal_madness_45s.ogg");
+const DEMO_NAME: &str = "demo_metal_madness_45s.ogg";
+
+/// The audio source of a song (the demo song's bytes come from the binary).
+pub fn audio_source(song: &Song) -> AudioSource {
+    match song {
+        Song::File(p) => AudioSource::File(p.clone()),
+        Song::Bytes { name, bytes } => AudioSource::Bytes {
+            name: PathBuf::from(name),
+            bytes: bytes.clone(),
+        },
+        Song::Demo => {
+            tracing::info!("no song given: using the bundled demo song ({DEMO_NAME})");
+            AudioSource::Bytes {
+                name: PathBuf::from(format!("<bundled demo> {DEMO_NAME}")),
+                bytes: Arc::from(DEMO_SONG),
+            }
+        }
+    }
+}
+
+/// A song and its features.
+pub struct AnalysedSong {
+    pub source: AudioSource,
+    /// The path or name shown in messages.
+    pub label: String,
+    pub features: MusicFeatures,
+}
+
+/// Seconds `[start, end)` of a song, and the same span in feature frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Span {
+    pub start_s: f64,
+    pub end_s: f64,
+    pub first_frame: usize,
+    pub end_frame: usize,
+}
+
+impl Span {
+    pub fn seconds(&self) -> f64 {
+        self.end_s - self.start_s
+    }
+}
+
+impl AnalysedSong {
+    pub fn analyse(song: &Song) -> Result<Self, GenerateError> {
+        let source = audio_source(song);
+        let label = source.label().display().to_string();
+        let features = extract(
+            &source,
+            &ExtractOptions {
+                fps: FPS,
+                set: FeatureSet::Edge35,
+                start_bpm: None,
+            },
+        )?;
+        Ok(AnalysedSong {
+            source,
+            label,
+            features,
+        })
+    }
+
+    /// Feature frames of the whole song.
+    pub fn frames(&self) -> usize {
+        self.features.features.rows
+    }
+
+    /// The song's length: librosa-style framing has a frame at both ends (1 + samples / hop
+    /// rows), so a song of d seconds has d · 30 frame intervals.
+    pub fn seconds(&self) -> f64 {
+        self.frames().saturating_sub(1) as f64 / f64::from(FPS)
+    }
+
+    /// `[start, end)` (defaults: the whole song), checked, in seconds and frames.
+    pub fn span(&self, start: Option<f64>, end: Option<f64>) -> Result<Span, GenerateError> {
+        let song_seconds = self.seconds();
+        let start_s = start.unwrap_or(0.0);
+        let end_s = end.unwrap_or(song_seconds).min(song_seconds);
+        if !(start_s.is_finite() && end_s.is_finite() && start_s >= 0.0 && start_s < end_s) {
+            return Err(GenerateError::Invalid(format!(
+                "--start {start_s} / --end {end_s}: need 0 ≤ start < end ≤ the song's \
+                 {song_seconds:.2} s"
+            )));
+        }
+        let fps = f64::from(FPS);
+        Ok(Span {
+            start_s,
+            end_s,
+            first_frame: (start_s * fps).round() as usize,
+            end_frame: ((end_s * fps).round() as usize).min(self.frames()),
+        })
+    }
+
+    /// The features of `span`, `[frames, dim]` row-major.
+    pub fn music(&self, span: &Span) -> &[f32] {
+        let cols = self.features.features.cols;
+        &self.features.features.data[span.first_frame * cols..span.end_frame * cols]
+    }
+
+    /// Music beats inside `span`, as frames from its start.
+    pub fn beat_frames(&self, span: &Span) -> Vec<usize> {
+        self.features
+            .beat_frames
+            .iter()
+            .filter(|&&b| b >= span.first_frame && b < span.end_frame)
+            .map(|&b| b - span.first_frame)
+            .collect()
+    }
+}
+
+/// The song between `start` and `end` seconds as a temporary mono 16-bit WAV (the MP4's
+/// sound track).
+pub(crate) fn segment_wav(
+    source: &AudioSource,
+    start: f64,
+    end: f64,
+) -> Result<tempfile::NamedTempFile, GenerateError> {
+    let audio = dancegen_music::load::load_many(source, &[0], |_| {})?
+        .into_iter()
+        .next()
+        .ok_or_else(|| GenerateError::Generation("decoding the song for the preview".into()))?;
+    let sr = audio.sample_rate;
+    let a = ((start * f64::from(sr)) as usize).min(audio.samples.len());
+    let b = ((end * f64::from(sr)) as usize).min(audio.samples.len());
+    let io = |e: &dyn std::fmt::Display| GenerateError::Output {
+        path: PathBuf::from("<temporary WAV for the preview>"),
+        reason: e.to_string(),
+    };
+    let tmp = tempfile::Builder::new()
+        .suffix(".wav")
+        .tempfile()
+        .map_err(|e| io(&e))?;
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: sr,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(tmp.path(), spec).map_err(|e| io(&e))?;
+    for &s in &audio.samples[a..b] {
+        w.write_sample((s.clamp(-1.0, 1.0) * 32767.0) as i16)
+            .map_err(|e| io(&e))?;
+    }
+    w.finalize().map_err(|e| io(&e))?;
+    Ok(tmp)
+}

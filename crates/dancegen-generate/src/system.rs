@@ -1,0 +1,96 @@
+//! The one trait a dance system implements to plug into the generator.
+
+use std::path::Path;
+
+use dancegen_motion::repr::SmplMotion;
+use dancegen_nn::burn::tensor::Device;
+use dancegen_nn::progress::StepHook;
+
+use crate::error::GenerateError;
+use crate::request::CommonOptions;
+use crate::song::{AnalysedSong, Span};
+
+/// What a dancer is in the dance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// The one generated dancer of a solo.
+    Solo,
+    /// A duet's given leader (the input motion, not generated).
+    Leader,
+    /// A duet's generated partner.
+    Follower,
+}
+
+impl Role {
+    /// Whether the system made this dancer (rather than being given it).
+    pub fn generated(self) -> bool {
+        !matches!(self, Role::Leader)
+    }
+}
+
+/// One dancer: SMPL 24 motion (Y-up, metres, 30 fps) standing on the floor.
+#[derive(Clone, Debug)]
+pub struct Dancer {
+    pub role: Role,
+    pub motion: SmplMotion,
+}
+
+/// What a system returns: its dancers and what it did, in words for the front ends.
+#[derive(Clone, Debug)]
+pub struct Dance {
+    pub dancers: Vec<Dancer>,
+    /// The music danced to.
+    pub span: Span,
+    /// What was made, e.g. "300 frames (10.0 s at 30 fps), genre salsa, seed 3, ...".
+    pub summary: String,
+    /// Where the generation time went, e.g. "sampling 0.20 s, decoding 0.05 s; " (may be
+    /// empty; it is printed before the total time).
+    pub timing_breakdown: String,
+    /// Post-processing remarks printed after the timings.
+    pub notes: Vec<String>,
+}
+
+/// Everything a system gets for one job.
+pub struct DanceInput<'a, O> {
+    pub song: &'a AnalysedSong,
+    pub common: &'a CommonOptions,
+    pub options: &'a O,
+    pub device: &'a Device,
+    /// Told of every sampler step; answers `Break` when the job is cancelled.
+    pub hook: &'a dyn StepHook,
+}
+
+/// A dance system (Lodge++, ReactDance, ...): how its model loads and how it dances.
+///
+/// The generator does everything around it once for every system: finding and caching the
+/// model, analysing the song, progress and cancellation, writing the outputs.
+pub trait DanceSystem: 'static {
+    /// The name users choose it by (`--system solo`).
+    const NAME: &'static str;
+    /// The `kind` in its models' `model.toml`.
+    const MODEL_KIND: &'static str;
+    /// The shipped model found on the search path when no `--model` is given.
+    const DEFAULT_MODEL: &'static str;
+    /// The parts the system reports progress under (its sampler's [`StepHook`] part names)
+    /// with their rough share of its running time.
+    const PARTS: &'static [(&'static str, f64)];
+
+    type Model: Send + Sync + 'static;
+    type Options;
+
+    fn load(dir: &Path, device: &Device) -> Result<Self::Model, GenerateError>;
+
+    /// Checks the request against the model before the song is analysed (a wrong genre
+    /// fails at once).
+    fn check(
+        model: &Self::Model,
+        common: &CommonOptions,
+        options: &Self::Options,
+    ) -> Result<(), GenerateError>;
+
+    fn dance(
+        model: &Self::Model,
+        input: DanceInput<'_, Self::Options>,
+    ) -> Result<Dance, GenerateError>;
+}

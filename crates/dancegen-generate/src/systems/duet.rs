@@ -1,0 +1,285 @@
+//! Duet: the partner of a given leader (ReactDance, `dancegen_reactdance`).
+//!
+//! Leader (SMPL 24 at 30 fps) + the music from `start` for the leader's length → follower
+//! of the same length in the leader's world frame, then (unless turned off) moved out of the
+//! leader's body by the couple separation. The dance is `[leader, follower]`.
+
+use std::path::Path;
+
+use dancegen_motion::couple_separation::SeparationConfig;
+use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_motion::repr::SmplMotion;
+use dancegen_nn::burn::tensor::Device;
+use dancegen_nn::progress::DENOISING;
+use dancegen_reactdance::blc::{LatentSampling, LongForm};
+use dancegen_reactdance::bundle::DuetModel;
+use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked};
+
+use crate::error::GenerateError;
+use crate::request::CommonOptions;
+use crate::song::{FPS, Span};
+use crate::system::{Dance, DanceInput, DanceSystem, Dancer, Role};
+
+/// Shortest leader the model accepts: one latent token.
+pub const MIN_LEADER_FRAMES: usize = 8;
+
+/// The latent's long-form sampler.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DuetSampler {
+    /// Blocked Local Context: every block at once (ReactDance).
+    #[default]
+    Blc,
+    /// Window by window (ablation).
+    Autoregressive,
+}
+
+/// Duet options beyond [`CommonOptions`] (whose `guidance` is one weight for every level,
+/// single-scale CFG with s = w − 1, and whose `genre` and `end` do not apply).
+#[derive(Clone, Debug)]
+pub struct DuetOptions {
+    /// The leader, SMPL 24 at 30 fps ([`load_leader`]).
+    pub leader: SmplMotion,
+    /// How the leader is named in messages (its file).
+    pub leader_label: String,
+    pub sampler: DuetSampler,
+    /// Guidance s of the coarse (base) HFSQ level.
+    pub guidance_coarse: Option<f64>,
+    /// Guidance s of the fine (residual) levels.
+    pub guidance_fine: Option<f64>,
+    /// Guidance s per level, coarse first (the last value repeats).
+    pub guidance_levels: Vec<f64>,
+    /// Move the follower out of the leader's body (hands may touch).
+    pub separation: bool,
+}
+
+impl DuetOptions {
+    /// The shipped system's options for `leader`.
+    pub fn new(leader: SmplMotion, leader_label: impl Into<String>) -> Self {
+        DuetOptions {
+            leader,
+            leader_label: leader_label.into(),
+            sampler: DuetSampler::Blc,
+            guidance_coarse: None,
+            guidance_fine: None,
+            guidance_levels: Vec::new(),
+            separation: true,
+        }
+    }
+}
+
+/// The leader file as SMPL 24 at 30 fps, or an error naming the file. Any format `convert`
+/// reads; a humanoid BVH is retargeted.
+pub fn load_leader(path: &Path) -> Result<SmplMotion, GenerateError> {
+    let invalid = |why: String| GenerateError::Invalid(format!("{}: {why}", path.display()));
+    let loaded = load_motion_file(path)?;
+    let opts = ConvertOptions {
+        to_smpl24: true,
+        fps: Some(FPS as f32),
+        ..Default::default()
+    };
+    let m = match convert_motion(path, loaded, &opts).map_err(|e| {
+        invalid(format!(
+            "cannot use it as the leader (a humanoid skeleton retargets to SMPL 24): {e}"
+        ))
+    })? {
+        LoadedMotion::Smpl(m) => m,
+        LoadedMotion::Group(g) => {
+            return Err(invalid(format!(
+                "{} dancers; the leader must be one dancer",
+                g.len()
+            )));
+        }
+        other => {
+            return Err(invalid(format!(
+                "a {} has no joint rotations to lead with (give SMPL motion or a humanoid BVH)",
+                other.kind()
+            )));
+        }
+    };
+    if m.poses.iter().chain(&m.trans).any(|v| !v.is_finite()) {
+        return Err(invalid("the motion holds NaN or infinite values".into()));
+    }
+    if m.frames() < MIN_LEADER_FRAMES {
+        return Err(invalid(format!(
+            "{} frames at {FPS} fps; the leader needs at least {MIN_LEADER_FRAMES}",
+            m.frames()
+        )));
+    }
+    Ok(m)
+}
+
+/// Guidance scale per HFSQ level: the model's, or one weight for all (`--guidance`), or the
+/// given list, then the coarse and fine overrides.
+fn level_scales(
+    common: &CommonOptions,
+    duet: &DuetOptions,
+    defaults: &[f64],
+    levels: usize,
+) -> Result<Vec<f64>, GenerateError> {
+    let pick = |v: &[f64], r: usize| v.get(r).or(v.last()).copied();
+    let mut s: Vec<f64> = (0..levels)
+        .map(|r| pick(defaults, r).unwrap_or(0.0))
+        .collect();
+    if let Some(w) = common.guidance {
+        s = vec![w - 1.0; levels];
+    }
+    if !duet.guidance_levels.is_empty() {
+        s = (0..levels)
+            .map(|r| pick(&duet.guidance_levels, r).unwrap_or(0.0))
+            .collect();
+    }
+    if let Some(c) = duet.guidance_coarse
+        && let Some(first) = s.first_mut()
+    {
+        *first = c;
+    }
+    if let Some(f) = duet.guidance_fine {
+        s.iter_mut().skip(1).for_each(|v| *v = f);
+    }
+    if let Some(bad) = s.iter().find(|v| !v.is_finite() || **v < -1.0) {
+        return Err(GenerateError::Invalid(format!(
+            "guidance scale {bad}: use s ≥ −1 (0 = conditional only, larger = stronger)"
+        )));
+    }
+    Ok(s)
+}
+
+pub struct Duet;
+
+impl DanceSystem for Duet {
+    const NAME: &'static str = "duet";
+    const MODEL_KIND: &'static str = dancegen_reactdance::bundle::KIND;
+    const DEFAULT_MODEL: &'static str = "reactdance-small";
+    const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
+
+    type Model = DuetModel;
+    type Options = DuetOptions;
+
+    fn load(dir: &Path, device: &Device) -> Result<DuetModel, GenerateError> {
+        DuetModel::load(dir, device).map_err(|e| GenerateError::ModelLoad {
+            system: "duet",
+            dir: dir.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    fn check(
+        model: &DuetModel,
+        common: &CommonOptions,
+        duet: &DuetOptions,
+    ) -> Result<(), GenerateError> {
+        if common.genre.is_some() {
+            return Err(GenerateError::Invalid(
+                "--genre applies to solo dances; the duet model follows the leader's style".into(),
+            ));
+        }
+        if common.steps == Some(0) {
+            return Err(GenerateError::Invalid("--steps must be at least 1".into()));
+        }
+        if common.end.is_some() {
+            return Err(GenerateError::Invalid(
+                "--end does not apply with --leader: the music is cut to the leader's length"
+                    .into(),
+            ));
+        }
+        if let Some(start) = common.start
+            && !(start.is_finite() && start >= 0.0)
+        {
+            return Err(GenerateError::Invalid(format!(
+                "--start {start}: give a time in seconds ≥ 0"
+            )));
+        }
+        let levels = model.config.autoencoder.num_levels;
+        level_scales(common, duet, &model.config.sampling.guidance, levels).map(|_| ())
+    }
+
+    fn dance(
+        model: &DuetModel,
+        input: DanceInput<'_, DuetOptions>,
+    ) -> Result<Dance, GenerateError> {
+        let (common, duet, song) = (input.common, input.options, input.song);
+        let levels = model.config.autoencoder.num_levels;
+        let guidance = level_scales(common, duet, &model.config.sampling.guidance, levels)?;
+        let leader = &duet.leader;
+        let start = common.start.unwrap_or(0.0);
+        let fps = f64::from(FPS);
+        let f0 = (start * fps).round() as usize;
+        let t = leader.frames();
+        let total = song.frames();
+        if f0 + t > total {
+            return Err(GenerateError::Invalid(format!(
+                "{}: the song is shorter than the leader: {:.2} s of music from {start:.2} s, \
+                 the leader {} lasts {:.2} s ({t} frames at {FPS} fps)",
+                song.label,
+                total.saturating_sub(f0) as f64 / fps,
+                duet.leader_label,
+                t as f64 / fps
+            )));
+        }
+        let span = Span {
+            start_s: start,
+            end_s: start + t as f64 / fps,
+            first_frame: f0,
+            end_frame: f0 + t,
+        };
+        let long_form = match duet.sampler {
+            DuetSampler::Blc => LongForm::Blc,
+            DuetSampler::Autoregressive => LongForm::Autoregressive,
+        };
+        let sampling = LatentSampling {
+            steps: common.steps.unwrap_or(model.config.sampling.steps),
+            eta: model.config.sampling.eta,
+            guidance: guidance.clone(),
+            seed: common.seed,
+            long_form,
+        };
+        let separation = duet.separation.then(SeparationConfig::default);
+        let out = generate_follower_hooked(
+            model,
+            leader,
+            song.music(&span),
+            &sampling,
+            separation.as_ref(),
+            input.device,
+            input.hook,
+        )
+        .map_err(|e| match e {
+            FollowerError::Cancelled(_) => GenerateError::Cancelled,
+            FollowerError::Invalid(why) => {
+                GenerateError::Generation(format!("generating the follower: {why}"))
+            }
+        })?;
+        Ok(Dance {
+            dancers: vec![
+                Dancer {
+                    role: Role::Leader,
+                    motion: leader.clone(),
+                },
+                Dancer {
+                    role: Role::Follower,
+                    motion: out.follower,
+                },
+            ],
+            span,
+            summary: format!(
+                "follower of {} ({t} frames, {:.1} s at {FPS} fps), seed {}, {long_form:?} \
+                 sampling, guidance {guidance:?}",
+                duet.leader_label,
+                t as f64 / fps,
+                common.seed,
+            ),
+            timing_breakdown: format!(
+                "sampling {:.2} s, decoding {:.2} s; ",
+                out.sample_s, out.decode_s
+            ),
+            notes: vec![match separation {
+                None => "no separation".to_string(),
+                Some(_) => format!(
+                    "separated from the leader by up to {:.0} mm in {:.2} s",
+                    out.separation_max_m * 1000.0,
+                    out.separate_s
+                ),
+            }],
+        })
+    }
+}

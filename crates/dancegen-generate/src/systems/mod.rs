@@ -1,0 +1,88 @@
+//! The systems the generator can run, one module each, and the table of every system name a
+//! user may ask for (including the ones not shipped yet, so the error can say so).
+
+pub mod duet;
+pub mod solo;
+
+/// A system users can name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SystemInfo {
+    /// `--system NAME`.
+    pub name: &'static str,
+    /// The method it implements.
+    pub method: &'static str,
+    /// `model.toml` `kind` of its models (empty while not shipped).
+    pub model_kind: &'static str,
+    pub default_model: &'static str,
+    /// Whether this version can run it.
+    pub available: bool,
+}
+
+use crate::system::DanceSystem;
+
+const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
+    SystemInfo {
+        name: S::NAME,
+        method,
+        model_kind: S::MODEL_KIND,
+        default_model: S::DEFAULT_MODEL,
+        available: true,
+    }
+}
+
+/// Every system, in the order they are listed to users.
+pub const SYSTEMS: [SystemInfo; 4] = [
+    shipped::<solo::Solo>("Lodge++"),
+    shipped::<duet::Duet>("ReactDance"),
+    SystemInfo {
+        name: "group",
+        method: "TCDiff++",
+        model_kind: "",
+        default_model: "",
+        available: false,
+    },
+    SystemInfo {
+        name: "holistic",
+        method: "SoulNet",
+        model_kind: "",
+        default_model: "",
+        available: false,
+    },
+];
+
+/// The system called `name`, or an error listing the choices (and saying which ones this
+/// version does not have yet).
+pub fn by_name(name: &str) -> Result<SystemInfo, String> {
+    let available: Vec<&str> = SYSTEMS
+        .iter()
+        .filter(|s| s.available)
+        .map(|s| s.name)
+        .collect();
+    match SYSTEMS.iter().find(|s| s.name == name) {
+        Some(s) if s.available => Ok(*s),
+        Some(s) => Err(format!(
+            "the {} system ({}) is not shipped in this version yet; choose one of: {}",
+            s.name,
+            s.method,
+            available.join(", ")
+        )),
+        None => Err(format!(
+            "unknown system '{name}'; choose one of: {} (coming: {})",
+            available.join(", "),
+            SYSTEMS
+                .iter()
+                .filter(|s| !s.available)
+                .map(|s| s.name)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+    }
+}
+
+/// The system whose models have `kind` in their `model.toml`.
+pub fn by_model_kind(kind: &str) -> Option<SystemInfo> {
+    SYSTEMS
+        .iter()
+        .find(|s| s.available && s.model_kind == kind)
+        .copied()
+}

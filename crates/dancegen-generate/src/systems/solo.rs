@@ -1,0 +1,204 @@
+//! Solo: one dancer for a song (Lodge++, `dancegen_lodgepp`).
+//!
+//! Song span → EDGE-35 features and beats → Lodge++ → EDGE-151 frames → SMPL motion (Y-up,
+//! metres, 30 fps) standing on the floor.
+
+use std::path::Path;
+
+use dancegen_lodgepp::bundle::SoloModel;
+use dancegen_lodgepp::choreo_gpt::CHOREOGRAPHY;
+use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
+use dancegen_motion::repr::motion::{FOOT_JOINTS, GroundMode};
+use dancegen_motion::repr::{Edge151, SmplMotion};
+use dancegen_nn::burn::tensor::Device;
+use dancegen_nn::progress::DENOISING;
+
+use crate::error::GenerateError;
+use crate::request::CommonOptions;
+use crate::song::FPS;
+use crate::system::{Dance, DanceInput, DanceSystem, Dancer, Role};
+
+/// Shortest music the model dances to (one PDDM window needs material).
+pub const MIN_SONG_SECONDS: f64 = 2.0;
+
+/// The Lodge++ long-form sampler.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SoloSampler {
+    /// The full system: choreography network, primitives, parallel windows.
+    #[default]
+    Lodgepp,
+    /// EDGE's half-overlapping windows (ablation).
+    Edge,
+    /// Window after window (ablation).
+    Autoregressive,
+}
+
+/// Solo options beyond [`CommonOptions`]; the defaults are the shipped system.
+#[derive(Clone, Debug)]
+pub struct SoloOptions {
+    pub sampler: SoloSampler,
+    pub foot_refine: bool,
+    pub penetration_guidance: bool,
+    /// Planted feet stay put (root lock + leg IK; post-processing, not part of Lodge++).
+    pub foot_lock: bool,
+}
+
+impl Default for SoloOptions {
+    fn default() -> Self {
+        SoloOptions {
+            sampler: SoloSampler::Lodgepp,
+            foot_refine: true,
+            penetration_guidance: true,
+            foot_lock: true,
+        }
+    }
+}
+
+pub struct Solo;
+
+impl DanceSystem for Solo {
+    const NAME: &'static str = "solo";
+    const MODEL_KIND: &'static str = dancegen_lodgepp::bundle::KIND;
+    const DEFAULT_MODEL: &'static str = "lodgepp-small";
+    // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
+    const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
+
+    type Model = SoloModel;
+    type Options = SoloOptions;
+
+    fn load(dir: &Path, device: &Device) -> Result<SoloModel, GenerateError> {
+        SoloModel::load(dir, device).map_err(|e| GenerateError::ModelLoad {
+            system: "Lodge++",
+            dir: dir.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    fn check(
+        model: &SoloModel,
+        common: &CommonOptions,
+        _: &SoloOptions,
+    ) -> Result<(), GenerateError> {
+        if let Some(w) = common.guidance
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(GenerateError::Invalid(format!(
+                "--guidance {w}: use a non-negative number (1 = no guidance, 2 = Lodge's default)"
+            )));
+        }
+        if common.steps == Some(0) {
+            return Err(GenerateError::Invalid("--steps must be at least 1".into()));
+        }
+        genre(model, common).map(|_| ())
+    }
+
+    fn dance(
+        model: &SoloModel,
+        input: DanceInput<'_, SoloOptions>,
+    ) -> Result<Dance, GenerateError> {
+        let (genre_index, genre_name) = genre(model, input.common)?;
+        let song = input.song;
+        let span = song.span(input.common.start, input.common.end)?;
+        if span.seconds() < MIN_SONG_SECONDS {
+            return Err(GenerateError::Invalid(format!(
+                "{}: {:.2} s of music to dance to; the model needs at least {MIN_SONG_SECONDS} s",
+                song.label,
+                span.seconds()
+            )));
+        }
+        let music = song.music(&span);
+        let beats = song.beat_frames(&span);
+        let opts = generate_options(model, genre_index, input.common, input.options);
+        let grad_device = input.device.clone().autodiff();
+        let dance =
+            model.generate_hooked(music, &beats, &opts, input.device, &grad_device, input.hook)?;
+        tracing::info!(
+            horizontal_m = dance.seam_correction.horizontal,
+            height_m = dance.seam_correction.height,
+            "largest root corrections where generated frames meet the shared boundary frames"
+        );
+        let motion = to_smpl(&dance.frames)?;
+        Ok(Dance {
+            dancers: vec![Dancer {
+                role: Role::Solo,
+                motion,
+            }],
+            span,
+            summary: format!(
+                "{} frames ({:.1} s at {FPS} fps), genre {genre_name}, seed {}, {} windows, \
+                 {} key motions",
+                dance.n_frames,
+                dance.n_frames as f64 / f64::from(FPS),
+                input.common.seed,
+                dance.windows,
+                dance.key_motions,
+            ),
+            timing_breakdown: String::new(),
+            notes: Vec::new(),
+        })
+    }
+}
+
+/// The requested genre (default: the model's) as the model's index and name.
+fn genre(model: &SoloModel, common: &CommonOptions) -> Result<(usize, String), GenerateError> {
+    let name = common
+        .genre
+        .clone()
+        .unwrap_or_else(|| model.config.default_genre.clone());
+    let index = model.genre_index(&name).map_err(GenerateError::Invalid)?;
+    Ok((index, name))
+}
+
+fn generate_options(
+    model: &SoloModel,
+    genre: usize,
+    common: &CommonOptions,
+    solo: &SoloOptions,
+) -> GenerateOptions {
+    let mut opts = GenerateOptions::defaults(model, genre, common.seed);
+    if let Some(s) = common.steps {
+        opts.steps = s;
+    }
+    if let Some(w) = common.guidance {
+        opts.guidance = w;
+    }
+    opts.sampler = match solo.sampler {
+        SoloSampler::Lodgepp => Sampler::Lodgepp,
+        SoloSampler::Edge => Sampler::Edge,
+        SoloSampler::Autoregressive => Sampler::Autoregressive,
+    };
+    opts.refine = solo.foot_refine;
+    if !solo.penetration_guidance {
+        opts.penetration = None;
+    }
+    if !solo.foot_lock {
+        opts.foot_lock = false;
+    }
+    opts
+}
+
+/// Raw EDGE-151 frames → SMPL motion standing on the floor: the supporting foot at y = 0 and
+/// no frame with a foot below it.
+fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
+    if frames.iter().any(|v| !v.is_finite()) {
+        return Err(GenerateError::Generation(
+            "the model produced non-finite values (please report this with the song and seed)"
+                .into(),
+        ));
+    }
+    let motion_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
+    let mut m = Edge151::decode(frames).map_err(|e| motion_err(&e))?;
+    m.put_on_ground_with(GroundMode::SupportFeet)
+        .map_err(|e| motion_err(&e))?;
+    let joints = m.joints_world().map_err(|e| motion_err(&e))?;
+    for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
+        let low = FOOT_JOINTS
+            .iter()
+            .map(|&j| joints[(f * 24 + j) * 3 + 1])
+            .fold(f32::INFINITY, f32::min);
+        if low < 0.0 {
+            p[1] -= low;
+        }
+    }
+    Ok(m)
+}
