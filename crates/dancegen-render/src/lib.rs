@@ -308,6 +308,119 @@ mod tests {
         assert_eq!(count, n);
     }
 
+    /// A track whose every joint moves by `shift(f)` at frame `f`.
+    fn moved(mut t: DancerTrack, shift: impl Fn(usize) -> [f32; 3]) -> DancerTrack {
+        let j = t.num_joints();
+        for f in 0..t.frames() {
+            let d = shift(f);
+            for p in t.joints[f * j * 3..(f + 1) * j * 3].chunks_exact_mut(3) {
+                for (v, dv) in p.iter_mut().zip(d) {
+                    *v += dv;
+                }
+            }
+        }
+        t
+    }
+
+    /// The dirty-rectangle renderer must give exactly the full-frame renderer's pixels: two
+    /// dancers that cross and overlap, one walking from one edge of the view to the other and
+    /// jumping (shadows that spread and move), a raw-joint figure (spheres only), at 1x, 2x and
+    /// 3x supersampling, with and without shadows, and at a size where the dancers reach past
+    /// the image edges.
+    #[test]
+    fn fast_frames_equal_full_frame_rendering() {
+        let frames = 40;
+        let a = moved(tpose(frames, 0.0), |f| {
+            let u = f as f32 / (frames - 1) as f32;
+            [
+                -2.5 + 5.0 * u,
+                (u * 9.0).sin().abs() * 0.6,
+                0.3 * (u * 5.0).cos(),
+            ]
+        });
+        let b = moved(tpose(frames, 0.0), |f| {
+            let u = f as f32 / (frames - 1) as f32;
+            [0.8 - 1.6 * u, 0.0, -0.4 + 0.8 * u]
+        });
+        let mut c = moved(tpose(frames, 1.2), |f| [0.0, 0.1 * (f % 7) as f32, 0.0]);
+        c.parents = vec![None; c.parents.len()];
+        let mut checked = 0;
+        for (w, h, ss, shadows) in [
+            (160, 120, 2, true),
+            (96, 64, 3, true),
+            (120, 90, 1, true),
+            (128, 96, 2, false),
+        ] {
+            let opts = RenderOptions {
+                width: w,
+                height: h,
+                supersample: ss,
+                shadows,
+            };
+            let scene = Scene::new(&[a.clone(), b.clone(), c.clone()], &opts).unwrap();
+            for k in 0..frames {
+                let t = k as f32 / 30.0 + 0.013;
+                let fast = scene.render_at(t);
+                let full = scene.render_full_at(t);
+                assert_eq!(fast.data.len(), full.data.len());
+                let bad = fast
+                    .data
+                    .iter()
+                    .zip(&full.data)
+                    .filter(|(x, y)| x != y)
+                    .count();
+                assert_eq!(
+                    bad, 0,
+                    "{w}x{h} ss {ss} shadows {shadows} t {t}: {bad} bytes differ"
+                );
+                checked += 1;
+            }
+        }
+        // The camera is fitted to every third frame of a long clip: the frames in between are
+        // free to leave the view, reach the image edges or come up to (and behind) the camera.
+        let n = 1201;
+        let long = moved(tpose(n, 0.0), |f| match f % 3 {
+            1 => [1.2 * (f % 5) as f32 - 2.4, 0.2 * (f % 4) as f32, 0.0],
+            2 => {
+                let k = 2.0 + 1.5 * (f % 11) as f32;
+                [0.55 * k, 0.32 * k - 0.5, 1.0 * k]
+            }
+            _ => [0.0; 3],
+        });
+        let scene = Scene::new(&[long, tpose(n, 0.7)], &RenderOptions::new(160, 120)).unwrap();
+        for f in (1..60).filter(|f| f % 3 != 0) {
+            let t = f as f32 / 30.0;
+            assert_eq!(scene.render_at(t), scene.render_full_at(t), "frame {f}");
+            checked += 1;
+        }
+        assert_eq!(checked, 4 * frames + 40);
+    }
+
+    /// The dithering table gives the float formula's index for every value at every Bayer
+    /// position and channel.
+    #[test]
+    fn gif_dither_table_matches_the_formula() {
+        let (w, h) = (256u32, 16u32);
+        let mut data = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                // Each row runs every channel through all 256 values; every fourth row shifts
+                // them by one, so each value meets all 16 Bayer cells.
+                let s = y / 4;
+                data.extend([x + s, x * 7 + s, 255 - x + s].map(|v| (v % 256) as u8));
+            }
+        }
+        let img = RgbImage {
+            width: w,
+            height: h,
+            data,
+        };
+        assert_eq!(
+            write::quantize_gif(&img),
+            write::quantize_gif_reference(&img)
+        );
+    }
+
     #[test]
     fn missing_ffmpeg_is_a_clear_error() {
         // Only the error path; the CLI test covers a real ffmpeg when there is one.

@@ -548,6 +548,10 @@ impl Scene {
     /// of the box that [`StadiumSpan`] leaves.
     fn draw_prim(&self, p: &ScreenPrim, light: V3, rect: &Rect, col: &mut [V3], depth: &mut [f32]) {
         let [bx0, by0, bx1, by1] = p.bbox;
+        if bx0 >= bx1 || by0 >= by1 {
+            // Off screen (left out of the dirty rectangle).
+            return;
+        }
         let (a, b, r, colour) = (p.a, p.b, p.r, p.colour);
         let sphere = a == b;
         let w = rect.x1 - rect.x0;
@@ -747,8 +751,8 @@ impl Scene {
                     }
                 }
                 let o = (y * w + x) * 3;
-                for k in 0..3 {
-                    img.data[o + k] = (acc[k] * norm * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+                for (out, a) in img.data[o..o + 3].iter_mut().zip(acc) {
+                    *out = (a * norm * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
                 }
             }
         }
@@ -1041,7 +1045,8 @@ impl StadiumSpan {
                 }
             }
         }
-        if !(lo <= hi) {
+        // Both still infinite (or NaN) when the row misses.
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
             return None;
         }
         // Pixel px has its centre at px + 0.5.
@@ -1128,6 +1133,9 @@ impl ShadowLanes {
     /// The largest darkening of floor point `q` by these primitives: per lane exactly
     /// `seg_dist_xz`, then `1 − smoothstep(inner, outer, dist)` times the strength where
     /// `dist < outer`, else nothing.
+    // Lanes index several arrays in lockstep; `max(0).min(1)` is `clamp(0, 1)` for the
+    // non-NaN values here and vectorises where `clamp` did not.
+    #[allow(clippy::needless_range_loop, clippy::manual_clamp)]
     fn occlusion(&self, q: [f32; 2]) -> f32 {
         // Written as straight-line selects (both sides of every `if` are computed) so that
         // the loop vectorises; the selected values are the scalar code's.

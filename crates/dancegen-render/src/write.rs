@@ -80,12 +80,10 @@ fn dither_lut() -> &'static DitherLut {
         let mut lut = Box::new([[[0u8; 256]; 3]; 16]);
         for (cell, t) in lut.iter_mut().enumerate() {
             let th = (BAYER4[cell / 4][cell % 4] + 0.5) / 16.0 - 0.5;
-            for v in 0..256usize {
-                for (c, (levels, weight)) in [(6.0f32, 42u32), (7.0, 6), (6.0, 1)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    t[c][v] = (quantize_level(v as u8, levels, th) * weight) as u8;
+            let channels = [(6.0f32, 42u32), (7.0, 6), (6.0, 1)];
+            for (table, (levels, weight)) in t.iter_mut().zip(channels) {
+                for (v, out) in table.iter_mut().enumerate() {
+                    *out = (quantize_level(v as u8, levels, th) * weight) as u8;
                 }
             }
         }
@@ -238,7 +236,7 @@ pub fn write_mp4(
     fps: f32,
     audio: Option<&Path>,
 ) -> Result<usize, RenderError> {
-    if width % 2 != 0 || height % 2 != 0 {
+    if !width.is_multiple_of(2) || !height.is_multiple_of(2) {
         return Err(RenderError::Invalid(format!(
             "MP4 (yuv420p) needs an even width and height, got {width}x{height}"
         )));

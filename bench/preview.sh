@@ -1,0 +1,102 @@
+#!/usr/bin/env bash
+# Preview renderer benchmark: today's dancegen-render against a baseline revision, side by side.
+#
+#   bash bench/preview.sh [ROUNDS]          # default 3 rounds
+#   PREVIEW_BASE_REV=<rev> bash bench/preview.sh
+#
+# Both renderers run crates/dancegen-render/examples/preview_bench.rs (the current copy, put
+# into a git worktree of the baseline revision) on the same motion: CMU salsa takes 60_01..03
+# (BVH, 120 fps) retargeted to SMPL 24 at 30 fps and cut to the README command's 45 s, written as
+# the 640x480 30 fps MP4 with the demo song and the 640x480 15 fps GIF. Rounds alternate
+# baseline / current. Prints min and median frames/s per renderer and output, the ratio
+# current / baseline of the medians, and fails unless the GIFs are byte-identical, the MP4s'
+# decoded video frames are identical (ffmpeg -f framemd5) and the rendered RGB frames hash alike.
+#
+# Environment: PREVIEW_BASE_REV (default 437cb7c), PREVIEW_DATA (default
+# <repo>/../shared/data), PREVIEW_AUDIO (default assets/demo_metal_madness_45s.ogg),
+# PREVIEW_CACHE (default $HOME/.cache; build directories and the worktree go there).
+set -euo pipefail
+
+ROUNDS="${1:-3}"
+ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+BASE_REV="${PREVIEW_BASE_REV:-437cb7c}"
+DATA="${PREVIEW_DATA:-$ROOT/../shared/data}"
+AUDIO="${PREVIEW_AUDIO:-$ROOT/assets/demo_metal_madness_45s.ogg}"
+CACHE="${PREVIEW_CACHE:-$HOME/.cache}"
+CUR_TARGET="$CACHE/dancegen-render-target"
+BASE_TARGET="$CACHE/dancegen-preview-baseline-target"
+WORKTREE="$BASE_TARGET/worktree"
+OUT="$(mktemp -d "${TMPDIR:-/tmp}/preview-bench.XXXXXX")"
+MOTIONS=("$DATA/cmu-salsa/60_01_scaled.bvh" "$DATA/cmu-salsa/60_02_scaled.bvh" "$DATA/cmu-salsa/60_03_scaled.bvh")
+
+die() { echo "preview.sh: $*" >&2; exit 1; }
+for f in "${MOTIONS[@]}" "$AUDIO"; do [[ -f "$f" ]] || die "missing $f"; done
+command -v ffmpeg >/dev/null || die "ffmpeg is needed"
+
+base_commit="$(git -C "$ROOT" rev-parse --verify "$BASE_REV^{commit}")" || die "no revision $BASE_REV"
+cur_commit="$(git -C "$ROOT" rev-parse --short HEAD)"
+mkdir -p "$BASE_TARGET"
+if [[ -d "$WORKTREE" ]]; then
+  git -C "$WORKTREE" checkout -q --detach "$base_commit"
+else
+  git -C "$ROOT" worktree add -q --detach "$WORKTREE" "$base_commit"
+fi
+mkdir -p "$WORKTREE/crates/dancegen-render/examples"
+cp "$ROOT/crates/dancegen-render/examples/preview_bench.rs" "$WORKTREE/crates/dancegen-render/examples/"
+
+echo "== building baseline $(git -C "$ROOT" rev-parse --short "$base_commit") and current $cur_commit (release, one build at a time)"
+(cd "$WORKTREE" && CARGO_TARGET_DIR="$BASE_TARGET" cargo build -q --release -p dancegen-render --example preview_bench)
+(cd "$ROOT" && CARGO_TARGET_DIR="$CUR_TARGET" cargo build -q --release -p dancegen-render --example preview_bench)
+BIN_base="$BASE_TARGET/release/examples/preview_bench"
+BIN_cur="$CUR_TARGET/release/examples/preview_bench"
+
+echo "== $ROUNDS rounds, outputs in $OUT (load average: $(cut -d' ' -f1-3 /proc/loadavg))"
+for r in $(seq 1 "$ROUNDS"); do
+  for who in base cur; do
+    bin="BIN_$who"
+    dir="$OUT/$who-$r"
+    mkdir -p "$dir"
+    "${!bin}" "$dir" "$AUDIO" "${MOTIONS[@]}" | tee "$dir/log" | sed "s/^/round $r $who: /"
+  done
+done
+
+# "mp4: 1350 frames in 18.391 s = 73.4 frames/s (rgb fnv 6e83441f3efb6acb)"
+field() { awk -v k="$2:" '$1 == k { print $'"$3"' }' "$1"; }
+stats() { sort -g | awk '{ v[NR] = $1 } END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2; printf "%s %s\n", v[1], m }'; }
+
+fail=0
+echo
+echo "== identity"
+ref="$OUT/base-1"
+for r in $(seq 1 "$ROUNDS"); do
+  for who in base cur; do
+    dir="$OUT/$who-$r"
+    for kind in mp4 gif; do
+      [[ "$(field "$dir/log" $kind 9)" == "$(field "$ref/log" $kind 9)" ]] \
+        || { echo "DIFFERENT: $who round $r $kind rendered RGB frames"; fail=1; }
+    done
+    cmp -s "$dir/preview.gif" "$ref/preview.gif" || { echo "DIFFERENT: $who round $r GIF bytes"; fail=1; }
+  done
+done
+for who in base cur; do
+  ffmpeg -v error -i "$OUT/$who-1/preview.mp4" -map 0:v:0 -f framemd5 - | grep -v '^#' >"$OUT/$who.framemd5"
+done
+[[ -s "$OUT/base.framemd5" ]] || { echo "DIFFERENT: no decoded MP4 frames"; fail=1; }
+cmp -s "$OUT/base.framemd5" "$OUT/cur.framemd5" || { echo "DIFFERENT: MP4 decoded video frames (framemd5)"; fail=1; }
+echo "GIF bytes, MP4 decoded frames ($(wc -l <"$OUT/base.framemd5") framemd5 lines) and RGB frame hashes: $([[ $fail == 0 ]] && echo identical || echo NOT identical)"
+ls -l "$OUT/base-1/preview.mp4" "$OUT/cur-1/preview.mp4" "$OUT/base-1/preview.gif" "$OUT/cur-1/preview.gif" | awk '{ print "  " $5 " bytes " $NF }'
+
+echo
+echo "== frames/s (baseline $(git -C "$ROOT" rev-parse --short "$base_commit"), current $cur_commit, $ROUNDS rounds)"
+printf "%-4s %-9s %7s %8s %s\n" out renderer min median "per round"
+for kind in mp4 gif; do
+  for who in base cur; do
+    vals="$(for r in $(seq 1 "$ROUNDS"); do field "$OUT/$who-$r/log" $kind 8; done)"
+    read -r mn md <<<"$(stats <<<"$vals")"
+    printf "%-4s %-9s %7.1f %8.1f %s\n" "$kind" "$who" "$mn" "$md" "$(tr '\n' ' ' <<<"$vals")"
+    eval "med_${kind}_$who=$md"
+  done
+  b="med_${kind}_base"; c="med_${kind}_cur"
+  awk -v b="${!b}" -v c="${!c}" -v k="$kind" 'BEGIN { printf "%-4s ratio current/baseline (medians): %.2fx\n", k, c / b }'
+done
+[[ $fail == 0 ]] || die "outputs differ (see DIFFERENT above; files kept in $OUT)"
