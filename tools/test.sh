@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The test command (README, .ci/run): installs what the tests need, then runs
+# `cargo test --workspace --locked` (extra arguments are passed on to it).
+#
+# The tests need, beyond Rust:
+#   - libsoxr-dev + pkg-config: the music crate links libsoxr (librosa's resampler);
+#   - ffmpeg: MP4 previews;
+#   - chromium: a written .glb is opened with three.js in headless Chromium;
+#   - node + npm: the Khronos glTF validator and three.js, installed from the npm registry by
+#     the tests themselves into cargo's target directory (pinned versions);
+#   - ../shared next to the checkout: golden fixtures and real songs and motion.
+# Missing Debian packages are installed with apt-get (as root, or through sudo); without
+# either the script names them and stops.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+need=()
+pkg-config --exists soxr 2>/dev/null || need+=(libsoxr-dev pkg-config)
+command -v ffmpeg >/dev/null || need+=(ffmpeg)
+[ -x /usr/bin/chromium ] || need+=(chromium)
+{ command -v node >/dev/null && command -v npm >/dev/null; } || need+=(nodejs npm)
+if [ ${#need[@]} -gt 0 ]; then
+  if ! command -v apt-get >/dev/null; then
+    echo "tools/test.sh: install these first (Debian names): ${need[*]}" >&2
+    exit 1
+  fi
+  as_root=()
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null; then
+      as_root=(sudo)
+    else
+      echo "tools/test.sh: run as root or install: apt-get install ${need[*]}" >&2
+      exit 1
+    fi
+  fi
+  echo "tools/test.sh: installing ${need[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  "${as_root[@]}" apt-get update -qq
+  "${as_root[@]}" apt-get install -y -qq "${need[@]}" >/dev/null
+fi
+if [ ! -d ../shared/fixtures ]; then
+  echo "tools/test.sh: the tests read ../shared (fixtures, real data) next to this checkout;" \
+    "$(cd .. && pwd)/shared is missing" >&2
+  exit 1
+fi
+exec cargo test --workspace --locked "$@"
