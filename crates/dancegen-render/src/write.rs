@@ -118,10 +118,48 @@ pub(crate) fn quantize_gif_reference(img: &RgbImage) -> Vec<u8> {
     out
 }
 
+/// Frames drawn ahead of the encoder (about 28 MB at 640x480).
+const PIPELINE_FRAMES: usize = 32;
+
+/// Runs `consume` on `items` while a second thread keeps pulling the next ones, so drawing
+/// frames (the renderer's parallel batches) overlaps encoding them (the GIF encoder and the
+/// pipe to ffmpeg are sequential): without it, the cores sat idle whenever the encoder had a
+/// batch to work through. Stopping early (an error, a cancelled job) stops the producer at its
+/// next frame.
+pub fn pipelined<T: Send, R>(
+    items: impl Iterator<Item = T> + Send,
+    consume: impl FnOnce(&mut dyn Iterator<Item = T>) -> R,
+) -> R {
+    std::thread::scope(|s| {
+        let (tx, rx) = std::sync::mpsc::sync_channel(PIPELINE_FRAMES);
+        s.spawn(move || {
+            for item in items {
+                if tx.send(item).is_err() {
+                    break;
+                }
+            }
+        });
+        let mut received = rx.into_iter();
+        let r = consume(&mut received);
+        // Dropping the receiver ends a producer that is still drawing.
+        drop(received);
+        r
+    })
+}
+
 /// Writes an infinitely looping GIF at `fps` (delays in 1/100 s, rounded without drift).
+/// Frames are drawn ahead on another thread while earlier ones are encoded.
 pub fn write_gif(
     path: &Path,
-    frames: impl Iterator<Item = RgbImage>,
+    frames: impl Iterator<Item = RgbImage> + Send,
+    fps: f32,
+) -> Result<usize, RenderError> {
+    pipelined(frames, |frames| write_gif_from(path, frames, fps))
+}
+
+fn write_gif_from(
+    path: &Path,
+    frames: &mut dyn Iterator<Item = RgbImage>,
     fps: f32,
 ) -> Result<usize, RenderError> {
     if !(fps.is_finite() && fps > 0.0) {
@@ -225,12 +263,35 @@ pub fn ffmpeg_available() -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// x264 speed preset and quality of the MP4 previews. Measured on a 10 s generated solo
+/// (300 frames, 640x480, PSNR/SSIM of the decoded video against the rendered RGB frames):
+/// `medium` + CRF 20 (x264's default preset, used before) 49.66 dB / 0.99754, 4.1 s of CPU,
+/// 317 kB; `veryfast` + CRF 16 50.65 dB / 0.99778, 2.2 s of CPU, 462 kB. The faster preset
+/// with a lower CRF is better on both measures at half the encoder's CPU time (x264 was the
+/// larger part of a preview's cost once drawing got faster), for a 1.5x larger file.
+const X264_PRESET: &str = "veryfast";
+const X264_CRF: &str = "16";
+
 /// Encodes H.264/yuv420p MP4 through ffmpeg (raw RGB frames on its stdin), with `audio` muxed
 /// as AAC and cut to the shorter of the two. Written to a temporary `.mp4` in the output's
-/// directory and renamed into place on success.
+/// directory and renamed into place on success. Frames are drawn ahead on another thread
+/// while earlier ones go to ffmpeg.
 pub fn write_mp4(
     path: &Path,
-    frames: impl Iterator<Item = RgbImage>,
+    frames: impl Iterator<Item = RgbImage> + Send,
+    width: u32,
+    height: u32,
+    fps: f32,
+    audio: Option<&Path>,
+) -> Result<usize, RenderError> {
+    pipelined(frames, |frames| {
+        write_mp4_from(path, frames, width, height, fps, audio)
+    })
+}
+
+fn write_mp4_from(
+    path: &Path,
+    frames: &mut dyn Iterator<Item = RgbImage>,
     width: u32,
     height: u32,
     fps: f32,
@@ -285,7 +346,8 @@ pub fn write_mp4(
             "-shortest",
         ]);
     }
-    cmd.args(["-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "20"])
+    cmd.args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
+        .args(["-preset", X264_PRESET, "-crf", X264_CRF])
         .args(["-movflags", "+faststart", "-f", "mp4"])
         .arg(tmp.path())
         .stdin(Stdio::piped())
