@@ -5,10 +5,17 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// Runs the `dancegen` binary under test with `args`.
+/// Runs the `dancegen` binary under test with `args`. Its models come from this checkout by
+/// the source-tree rule (a binary in this tree's build output), never from a user's installed
+/// models: `DANCEGEN_MODEL_DIR` is removed and the data folder points at an empty place.
 pub fn dancegen(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_dancegen"))
         .args(args)
+        .env_remove("DANCEGEN_MODEL_DIR")
+        .env(
+            "XDG_DATA_HOME",
+            Path::new(env!("CARGO_TARGET_TMPDIR")).join("no-installed-models"),
+        )
         .output()
         .expect("run dancegen")
 }
