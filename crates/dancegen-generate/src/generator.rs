@@ -94,22 +94,27 @@ impl Generator {
         }
     }
 
-    /// The model in `dir` for `S`, loaded once per generator.
-    fn model<S: DanceSystem>(&self, dir: &Path) -> Result<(Arc<S::Model>, bool), GenerateError> {
-        let key = (
+    /// The cache key of `S`'s model in `dir`.
+    fn key<S: DanceSystem>(dir: &Path) -> (TypeId, PathBuf) {
+        (
             TypeId::of::<S>(),
             dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf()),
-        );
+        )
+    }
+
+    /// The model in `dir` for `S`, loaded once per generator.
+    fn model<S: DanceSystem>(&self, dir: &Path) -> Result<Arc<S::Model>, GenerateError> {
+        let key = Self::key::<S>(dir);
         if let Some(m) = self.lock_models().get(&key).cloned()
             && let Ok(m) = m.downcast::<S::Model>()
         {
-            return Ok((m, true));
+            return Ok(m);
         }
         // Loaded outside the lock: another job may load another model meanwhile (a second
         // load of the same one only costs time).
         let m = Arc::new(S::load(dir, &self.device)?);
         self.lock_models().insert(key, m.clone());
-        Ok((m, false))
+        Ok(m)
     }
 
     fn lock_models(
@@ -119,11 +124,7 @@ impl Generator {
     }
 
     fn is_cached<S: DanceSystem>(&self, dir: &Path) -> bool {
-        let key = (
-            TypeId::of::<S>(),
-            dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf()),
-        );
-        self.lock_models().contains_key(&key)
+        self.lock_models().contains_key(&Self::key::<S>(dir))
     }
 
     fn run_system<S: DanceSystem>(
@@ -154,7 +155,7 @@ impl Generator {
 
         tracker.begin(stage::LOAD_MODEL)?;
         let t = Instant::now();
-        let (model, _) = self.model::<S>(&model_dir)?;
+        let model = self.model::<S>(&model_dir)?;
         let load_model_s = t.elapsed().as_secs_f64();
         S::check(&model, &request.common, options)?;
 

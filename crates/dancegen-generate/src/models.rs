@@ -237,7 +237,7 @@ pub fn checkout_models() -> Option<PathBuf> {
     models.is_dir().then_some(models)
 }
 
-/// The model folders directly inside `dir` (sorted by name), or `dir` itself if it is one.
+/// The model folders directly inside `dir` (sorted by name; none if `dir` is missing).
 pub fn model_dirs_in(dir: &Path) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Vec::new();

@@ -134,10 +134,10 @@ pub(crate) fn plan(outputs: &[OutputRequest]) -> Result<Vec<PlannedOutput>, Gene
     Ok(planned)
 }
 
-/// Rough cost of the writing, in the units [`write_all`] reports: frames for previews and
-/// [`MOTION_FILE_UNITS`] for a motion file.
+/// Rough seconds the writing takes, for the job's progress plan (a motion file takes tens of
+/// milliseconds; a 45 s preview a few seconds on 2 cores). Only the proportion to the other
+/// stages matters: the ETA is extrapolated from the real time spent.
 pub(crate) fn estimated_seconds(planned: &[PlannedOutput]) -> f64 {
-    // A motion file takes tens of milliseconds; a 45 s preview a few seconds on 2 cores.
     planned
         .iter()
         .map(|p| if p.format.is_preview() { 4.0 } else { 0.1 })

@@ -194,8 +194,9 @@ fn a_cancel_while_drawing_the_preview_leaves_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let outs = [dir.path().join("a.npy"), dir.path().join("a.gif")];
     let cancel = CancelToken::new();
-    // The .npy is written first; cancelling half-way through the GIF's frames must take it
-    // back too: a job's files appear together or not at all.
+    // The .npy is written first; a cancel late in the writing (while the GIF's frames are
+    // drawn, or at the latest at the check before the files are committed) must take it back
+    // too: a job's files appear together or not at all.
     let (r, reports) = run_recorded(&g, &solo(&outs, 40.0, 46.0), &cancel, |p| {
         p.stage == "write_outputs" && p.fraction > 0.97
     });
