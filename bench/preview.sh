@@ -10,11 +10,12 @@
 # the 640x480 30 fps MP4 with the demo song and the 640x480 15 fps GIF. Rounds alternate
 # baseline / current. Prints min and median frames/s per renderer and output, the ratio
 # current / baseline of the medians, and fails unless the rendered RGB frames hash alike and
-# the GIFs are byte-identical. The MP4s' encoder settings differ (x264 preset and CRF: see
-# X264_PRESET in crates/dancegen-render/src/write.rs), so their video is compared with the
-# rendered frames themselves: one extra, untimed run keeps the raw RGB frames that go to ffmpeg,
-# and both MP4s get PSNR and SSIM against them; the script fails if the current MP4 is worse on
-# either.
+# the GIFs are byte-identical. The MP4s' encoder settings and pixel conversion differ (x264
+# preset and CRF: see X264_PRESET in crates/dancegen-render/src/write.rs; RGB to YUV 4:2:0 by
+# ffmpeg before, by crates/dancegen-render/src/yuv.rs since), so their video is compared with
+# the rendered frames themselves: one extra, untimed run of the current program saves the raw
+# RGB frames (PREVIEW_BENCH_RAW_FRAMES), both MP4s are decoded back to RGB, and PSNR and SSIM
+# against the saved frames are printed; the script fails if the current MP4 is worse on either.
 #
 # Environment: PREVIEW_BASE_REV (default 437cb7c), PREVIEW_DATA (default
 # <repo>/../shared/data), PREVIEW_AUDIO (default assets/demo_metal_madness_45s.ogg),
@@ -86,16 +87,12 @@ echo "GIF bytes and rendered RGB frame hashes: $([[ $fail == 0 ]] && echo identi
 
 echo
 echo "== MP4 video against the rendered frames (one untimed run keeps them raw)"
-cat >"$OUT/tee-ffmpeg.sh" <<EOS
-#!/bin/sh
-tee "$OUT/frames.rgb" | ffmpeg "\$@"
-EOS
-chmod +x "$OUT/tee-ffmpeg.sh"
 mkdir -p "$OUT/raw"
-DANCEGEN_FFMPEG="$OUT/tee-ffmpeg.sh" "$BIN_cur" "$OUT/raw" "$AUDIO" "${MOTIONS[@]}" >/dev/null
+PREVIEW_BENCH_RAW_FRAMES="$OUT/frames.rgb" "$BIN_cur" "$OUT/raw" "$AUDIO" "${MOTIONS[@]}" >/dev/null
+# The decoded video is turned back into RGB (as a player shows it) and compared there.
 quality() {
   ffmpeg -hide_banner -i "$1" -f rawvideo -pix_fmt rgb24 -s 640x480 -framerate 30 -i "$OUT/frames.rgb" \
-    -lavfi "[0:v][1:v]$2" -f null - 2>&1 | grep -o "$3[0-9.]*" | tail -1 | cut -d: -f2
+    -lavfi "[0:v]format=rgb24[v];[v][1:v]$2" -f null - 2>&1 | grep -o "$3[0-9.]*" | tail -1 | cut -d: -f2
 }
 for who in base cur; do
   psnr="$(quality "$OUT/$who-1/preview.mp4" psnr 'average:')"

@@ -203,7 +203,7 @@ fn unknown_extension_is_rejected() {
     assert!(String::from_utf8_lossy(&o.stderr).contains(".png, .gif or .mp4"));
 }
 
-/// The ffmpeg pipe with a stand-in ffmpeg: raw RGB frames on stdin, the encoder options, the
+/// The ffmpeg pipe with a stand-in ffmpeg: raw YUV 4:2:0 frames on stdin, the encoder options, the
 /// audio as a second input with `-shortest`, and the temporary `.mp4` renamed into place.
 #[cfg(unix)]
 #[test]
@@ -250,8 +250,7 @@ fn mp4_pipes_raw_frames_to_ffmpeg() {
     let args = std::fs::read_to_string(&log).unwrap();
     for want in [
         "-f rawvideo",
-        "-pix_fmt rgb24",
-        "-s 64x48",
+        "-pix_fmt yuv420p -s 64x48",
         "-framerate 5",
         "-c:v libx264",
         "-pix_fmt yuv420p",
@@ -259,9 +258,10 @@ fn mp4_pipes_raw_frames_to_ffmpeg() {
     ] {
         assert!(args.contains(want), "{want} missing in {args}");
     }
-    // 576 frames at 60 fps last 575/60 s: 48 frames at 5 fps, of 64x48 RGB.
+    // 576 frames at 60 fps last 575/60 s: 48 frames at 5 fps, of 64x48 YUV 4:2:0 (1.5 bytes
+    // a pixel).
     let bytes: usize = args.lines().last().unwrap().trim().parse().unwrap();
-    assert_eq!(bytes, 48 * 64 * 48 * 3);
+    assert_eq!(bytes, 48 * 64 * 48 * 3 / 2);
     assert_eq!(&std::fs::read(&out).unwrap()[4..8], b"ftyp");
     assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 1);
 }

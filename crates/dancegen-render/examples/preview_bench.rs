@@ -16,6 +16,7 @@
 //! Only the API that the CLI uses is called, so this program builds against older revisions of
 //! the renderer too (`bench/preview.sh` runs it against a baseline revision).
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -100,17 +101,38 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let track = load_track(&motions)?;
     let scene = Scene::new(&[track], &RenderOptions::new(WIDTH, HEIGHT))?;
 
+    // For `bench/preview.sh`'s untimed quality run: the MP4's rendered RGB frames, as they
+    // were before encoding, to compare the decoded video with.
+    let mut raw = match std::env::var_os("PREVIEW_BENCH_RAW_FRAMES") {
+        Some(p) => Some(std::io::BufWriter::new(std::fs::File::create(p)?)),
+        None => None,
+    };
+    let mut raw_err: Option<std::io::Error> = None;
     let mut hash = FrameHash::new();
     let t0 = Instant::now();
     let n = write::write_mp4(
         &out.join("preview.mp4"),
-        scene.stream(FPS).inspect(|f| hash.add(f)),
+        scene.stream(FPS).inspect(|f| {
+            hash.add(f);
+            if let Some(w) = raw.as_mut()
+                && raw_err.is_none()
+                && let Err(e) = w.write_all(&f.data)
+            {
+                raw_err = Some(e);
+            }
+        }),
         WIDTH,
         HEIGHT,
         FPS,
         audio.as_deref(),
     )?;
     report("mp4", n, t0.elapsed().as_secs_f64(), hash.0);
+    if let Some(e) = raw_err {
+        return Err(format!("PREVIEW_BENCH_RAW_FRAMES: {e}").into());
+    }
+    if let Some(mut w) = raw {
+        w.flush()?;
+    }
 
     let mut hash = FrameHash::new();
     let t0 = Instant::now();

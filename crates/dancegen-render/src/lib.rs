@@ -12,7 +12,8 @@
 //!   larger sphere. Ray-cast per pixel inside each primitive's screen box, z-buffered, Lambert
 //!   shading plus a sky/ground ambient term; 2×2 supersampling by default.
 //! - **Output** ([`write`]): PNG (one frame), GIF (fixed 256-colour palette with ordered
-//!   dithering) and MP4 (through an `ffmpeg` subprocess), all written atomically.
+//!   dithering) and MP4 (H.264 through an `ffmpeg` subprocess, fed YUV 4:2:0 frames that
+//!   [`yuv`] converts), all written atomically.
 //!
 //! Frames are rendered in parallel with rayon ([`FrameStream`] renders batches of frames and
 //! yields them in order, so long clips never sit in memory at once).
@@ -20,6 +21,7 @@
 mod math;
 mod scene;
 pub mod write;
+pub mod yuv;
 
 pub use scene::{DancerTrack, RenderOptions, Scene};
 
@@ -419,6 +421,87 @@ mod tests {
             write::quantize_gif(&img),
             write::quantize_gif_reference(&img)
         );
+    }
+
+    /// An MP4 decoded back to RGB by ffmpeg shows the rendered frames: the YUV conversion
+    /// uses the matrix and range that decoders assume for untagged video (a wrong one shifts
+    /// every colour, which PSNR and the dancer's mean colour catch). Needs ffmpeg, which
+    /// `tools/test.sh` installs.
+    #[test]
+    fn mp4_decodes_back_to_the_rendered_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("v.mp4");
+        let (w, h) = (160u32, 120u32);
+        let scene = Scene::new(&[tpose(30, 0.0)], &RenderOptions::new(w, h)).unwrap();
+        let frames: Vec<RgbImage> = scene.stream(10.0).collect();
+        let n = write::write_mp4(&path, frames.clone().into_iter(), w, h, 10.0, None).unwrap();
+        assert_eq!(n, frames.len());
+        let out = std::process::Command::new(write::ffmpeg_program())
+            .args(["-v", "error", "-i"])
+            .arg(&path)
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+            .output()
+            .expect("ffmpeg runs (tools/test.sh installs it)");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let want: Vec<u8> = frames.iter().flat_map(|f| f.data.iter().copied()).collect();
+        assert_eq!(out.stdout.len(), want.len());
+        let mse = out
+            .stdout
+            .iter()
+            .zip(&want)
+            .map(|(&a, &b)| (a as f64 - b as f64).powi(2))
+            .sum::<f64>()
+            / want.len() as f64;
+        let psnr = 10.0 * (255.0f64 * 255.0 / mse).log10();
+        assert!(psnr > 35.0, "PSNR {psnr:.2} dB");
+        // Mean colours of the background and of the figure's inner pixels (two pixels from
+        // any edge, where 4:2:0 chroma does not mix in the floor) stay within 3 levels per
+        // channel; a wrong range or matrix moves them by 10 or more.
+        let (wi, hi) = (w as usize, h as usize);
+        let mut sums = [[[0.0f64; 3]; 2]; 2];
+        let mut counts = [0.0f64; 2];
+        for (f, r) in want.chunks_exact(wi * hi * 3).enumerate() {
+            let fig = |x: usize, y: usize| {
+                let i = (y * wi + x) * 3;
+                is_figure([r[i], r[i + 1], r[i + 2]])
+            };
+            for y in 2..hi - 2 {
+                for x in 2..wi - 2 {
+                    let around: Vec<bool> = (y - 2..=y + 2)
+                        .flat_map(|yy| (x - 2..=x + 2).map(move |xx| (xx, yy)))
+                        .map(|(xx, yy)| fig(xx, yy))
+                        .collect();
+                    let kind = if around.iter().all(|&b| b) {
+                        1
+                    } else if around.iter().all(|&b| !b) {
+                        0
+                    } else {
+                        continue;
+                    };
+                    let i = f * wi * hi * 3 + (y * wi + x) * 3;
+                    for c in 0..3 {
+                        sums[kind][0][c] += out.stdout[i + c] as f64;
+                        sums[kind][1][c] += want[i + c] as f64;
+                    }
+                    counts[kind] += 1.0;
+                }
+            }
+        }
+        assert!(counts[1] > 500.0, "{} inner figure pixels", counts[1]);
+        for (kind, name) in [(0, "background"), (1, "figure")] {
+            for c in 0..3 {
+                let got = sums[kind][0][c] / counts[kind];
+                let exp = sums[kind][1][c] / counts[kind];
+                assert!(
+                    (got - exp).abs() < 3.0,
+                    "{name} channel {c}: decoded {got:.2}, rendered {exp:.2}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -6,6 +6,7 @@ use std::process::{Command, Stdio};
 
 use dancegen_io::write_atomic;
 
+use crate::yuv::Yuv420pStream;
 use crate::{RenderError, RgbImage};
 
 fn io_other(e: impl std::fmt::Display) -> std::io::Error {
@@ -263,16 +264,20 @@ pub fn ffmpeg_available() -> bool {
         .is_ok_and(|s| s.success())
 }
 
-/// x264 speed preset and quality of the MP4 previews. Measured on a 10 s generated solo
-/// (300 frames, 640x480, PSNR/SSIM of the decoded video against the rendered RGB frames):
-/// `medium` + CRF 20 (x264's default preset, used before) 49.66 dB / 0.99754, 4.1 s of CPU,
-/// 317 kB; `veryfast` + CRF 16 50.65 dB / 0.99778, 2.2 s of CPU, 462 kB. The faster preset
-/// with a lower CRF is better on both measures at half the encoder's CPU time (x264 was the
-/// larger part of a preview's cost once drawing got faster), for a 1.5x larger file.
-const X264_PRESET: &str = "veryfast";
-const X264_CRF: &str = "16";
+/// x264 speed preset and quality of the MP4 previews. Measured on the 45 s preview of
+/// `bench/preview.sh` (1350 frames, 640x480; PSNR / SSIM of the video decoded back to RGB
+/// against the rendered RGB frames; x264's CPU seconds; video bytes), with this crate's YUV
+/// conversion: `superfast` + CRF 20: 42.87 dB / 0.99392, 1.6 s, 3.7 MB; CRF 19: 43.05 dB /
+/// 0.99426, 1.75 s, 4.1 MB; CRF 22: 42.39 dB / 0.99302; `veryfast` + CRF 20: 40.96 dB /
+/// 0.99149, 2.2 s, 1.4 MB. The previews made before (ffmpeg's conversion, `medium` + CRF 20)
+/// scored 41.03 dB / 0.99308 in 1.5 MB at about 3 s. `superfast` + CRF 20 is closer to the
+/// rendered frames on both measures for half the encoder time, in a file about 2.5x larger
+/// (about 0.65 Mbit/s of video, still small for a preview).
+const X264_PRESET: &str = "superfast";
+const X264_CRF: &str = "20";
 
-/// Encodes H.264/yuv420p MP4 through ffmpeg (raw RGB frames on its stdin), with `audio` muxed
+/// Encodes H.264/yuv420p MP4 through ffmpeg (raw frames on its stdin, converted to YUV 4:2:0
+/// by [`Yuv420pStream`] on the way), with `audio` muxed
 /// as AAC and cut to the shorter of the two. Written to a temporary `.mp4` in the output's
 /// directory and renamed into place on success. Frames are drawn ahead on another thread
 /// while earlier ones go to ffmpeg.
@@ -328,7 +333,7 @@ fn write_mp4_from(
         .map_err(|e| wr_err(e.to_string()))?;
     let mut cmd = Command::new(ffmpeg_program());
     cmd.args(["-hide_banner", "-loglevel", "error", "-nostdin", "-y"])
-        .args(["-f", "rawvideo", "-pix_fmt", "rgb24"])
+        .args(["-f", "rawvideo", "-pix_fmt", "yuv420p"])
         .args(["-s", &format!("{width}x{height}")])
         .args(["-framerate", &format!("{fps}")])
         .args(["-i", "pipe:0"]);
@@ -370,12 +375,13 @@ fn write_mp4_from(
     let mut write_err = None;
     {
         let mut stdin = child.stdin.take().expect("piped stdin");
+        let mut yuv = Yuv420pStream::new();
         for img in frames {
             if img.width != width || img.height != height {
                 write_err = Some(format!("frame {count} is {}x{}", img.width, img.height));
                 break;
             }
-            if let Err(e) = stdin.write_all(&img.data) {
+            if let Err(e) = stdin.write_all(yuv.convert(img)) {
                 write_err = Some(e.to_string());
                 break;
             }
