@@ -66,6 +66,29 @@ pub enum BvhMotionError {
     Units(f64),
     #[error("BVH hierarchy is not a valid skeleton: {0}")]
     Skeleton(#[from] crate::skeleton::SkeletonError),
+    /// No retargeting convention ([`crate::retarget::CONVENTIONS`]) finds all its joints.
+    #[error(
+        "BVH joint names match no known skeleton convention; {}; joints found: {}",
+        missing_list(.missing),
+        .found.join(", ")
+    )]
+    UnknownSkeleton {
+        /// Every joint name of the file, in file order.
+        found: Vec<String>,
+        /// `(convention, the names it needs that the file lacks)` for every convention tried.
+        missing: Vec<(&'static str, Vec<String>)>,
+    },
+    /// The rest pose cannot define a rest alignment (e.g. a zero-length bone).
+    #[error("BVH rest pose: {0}")]
+    RestPose(String),
+}
+
+fn missing_list(missing: &[(&'static str, Vec<String>)]) -> String {
+    missing
+        .iter()
+        .map(|(c, m)| format!("{c} lacks {}", m.join(", ")))
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Per-frame world transforms of a BVH: rotations and positions for every joint.
