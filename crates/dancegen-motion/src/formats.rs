@@ -190,9 +190,22 @@ pub fn convert_motion(
         (LoadedMotion::Bvh(b), true) => {
             // Keep the source rate unless asked otherwise; retargeting then subsamples.
             let target = opts.fps.map_or(b.nominal_fps(), f64::from);
-            let out = retarget::retarget_poser_to_smpl(&b, target).map_err(|e| err(path, e))?;
+            // The convention is picked by joint names; a cgspeed reference T-pose frame 0 is
+            // dropped there, so every caller gets dance frames only.
+            let out = retarget::retarget_to_smpl(&b, target).map_err(|e| err(path, e))?;
+            if out.first_frame > 0 {
+                tracing::info!(
+                    "{}: dropped frame 0, the {} reference T-pose (not part of the take)",
+                    path.display(),
+                    out.source.convention.name
+                );
+            }
             let report = retarget::retarget_report(&b, &out).map_err(|e| err(path, e))?;
-            tracing::info!("{}: retargeted to SMPL 24: {report}", path.display());
+            tracing::info!(
+                "{}: retargeted {} skeleton to SMPL 24: {report}",
+                path.display(),
+                out.source.convention.name
+            );
             let motion =
                 SmplMotion::new(out.fps as f32, out.poses, out.trans).map_err(|e| err(path, e))?;
             LoadedMotion::Smpl(motion)
