@@ -36,14 +36,27 @@ impl Installed {
     }
 
     fn run(&self, args: &[&str]) -> Output {
-        Command::new(self.path("bin/dancegen"))
-            .args(args)
-            .current_dir(self.path("work"))
-            .env_remove("DANCEGEN_MODEL_DIR")
-            .env("XDG_DATA_HOME", self.path("data"))
-            .env("HOME", self.path("home"))
-            .output()
-            .expect("run the copied dancegen")
+        // The other tests of this binary start processes on other threads: a fork made while
+        // `std::fs::copy` still held the copy open for writing keeps that descriptor until the
+        // child execs, and until then exec'ing the copy fails with ETXTBSY ("text file busy").
+        // That window is short, so a few bounded retries end it.
+        let mut tries = 0;
+        loop {
+            let r = Command::new(self.path("bin/dancegen"))
+                .args(args)
+                .current_dir(self.path("work"))
+                .env_remove("DANCEGEN_MODEL_DIR")
+                .env("XDG_DATA_HOME", self.path("data"))
+                .env("HOME", self.path("home"))
+                .output();
+            match r {
+                Err(e) if e.kind() == std::io::ErrorKind::ExecutableFileBusy && tries < 50 => {
+                    tries += 1;
+                    std::thread::sleep(std::time::Duration::from_millis(20));
+                }
+                r => return r.expect("run the copied dancegen"),
+            }
+        }
     }
 }
 
