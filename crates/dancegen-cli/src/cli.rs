@@ -444,9 +444,14 @@ pub struct DatasetBuildArgs {
     /// Songs to pair the motions with (pseudo pairing).
     #[arg(long, num_args = 1.., value_name = "SONG")]
     pub music: Vec<PathBuf>,
-    /// Genre of every input (default: from the file names: AIST++ gXX codes, CMU 60/61 salsa).
+    /// Genre of every input (default: from the file names: AIST++ gXX codes; CMU subjects 05
+    /// modern, 55 whirl, 60/61 salsa, 85 break).
     #[arg(long, value_name = "NAME")]
     pub genre: Option<String>,
+    /// Also train on each training motion's left-right mirror image (clips `<name>_mirror`;
+    /// held-out motions are not mirrored). Pseudo pairing only.
+    #[arg(long)]
+    pub mirror: bool,
     /// Motion or song file names (without extension) to keep out of training.
     #[arg(long = "hold-out", num_args = 1.., value_name = "STEM")]
     pub hold_out: Vec<String>,

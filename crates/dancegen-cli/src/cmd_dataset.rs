@@ -48,6 +48,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         hold_out: args.hold_out.clone(),
         seed: args.seed,
         warp: WarpParams::default(),
+        mirror: args.mirror,
     };
     let pb = ProgressBar::new(0);
     if quiet {

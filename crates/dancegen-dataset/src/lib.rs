@@ -99,6 +99,10 @@ pub struct BuildOptions {
     /// Breaks exact ties between songs.
     pub seed: u64,
     pub warp: WarpParams,
+    /// Also trains on each training motion's left–right mirror image (clip `<name>_mirror`,
+    /// [`SmplMotion::mirror`], as EDGE and Lodge augment); held-out motions are never mirrored.
+    /// Pseudo pairing only.
+    pub mirror: bool,
 }
 
 impl BuildOptions {
@@ -114,6 +118,7 @@ impl BuildOptions {
             hold_out: Vec::new(),
             seed: 0,
             warp: WarpParams::default(),
+            mirror: false,
         }
     }
 }
@@ -280,6 +285,16 @@ pub(crate) fn load_units(path: &Path, genre: &str) -> Result<Vec<MotionUnit>, Da
     }
 }
 
+/// The left–right mirror image of a unit, as its own clip (`<name>_mirror`); the stem stays,
+/// so a `--hold-out` of the take covers both.
+fn mirrored_unit(u: &MotionUnit) -> MotionUnit {
+    MotionUnit {
+        name: format!("{}_mirror", u.name),
+        motion: u.motion.mirror(),
+        ..u.clone()
+    }
+}
+
 /// A finished clip before it is written.
 pub(crate) struct ClipData {
     name: String,
@@ -408,6 +423,13 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
         && g.trim().is_empty()
     {
         return Err(DatasetError::Options("--genre must not be empty".into()));
+    }
+    if opts.mirror && opts.pairing != Pairing::Pseudo {
+        return Err(DatasetError::Options(
+            "--mirror works with --pairing pseudo only (a couple or a data set layout is not \
+             mirrored)"
+                .into(),
+        ));
     }
     let clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
@@ -588,7 +610,12 @@ fn build_pseudo(
                 &train_songs
             };
             let mut entries = Vec::new();
-            for unit in load_units(path, &genre)? {
+            let mut units = load_units(path, &genre)?;
+            if opts.mirror && !motion_held {
+                let mirrored: Vec<MotionUnit> = units.iter().map(mirrored_unit).collect();
+                units.extend(mirrored);
+            }
+            for unit in units {
                 for clip in pair_unit(&unit, &songs, candidates, opts, held)? {
                     entries.push(write_clip(&opts.out, &clip)?);
                 }

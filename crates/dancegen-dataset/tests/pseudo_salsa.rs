@@ -145,3 +145,58 @@ fn bad_input_names_the_file() {
     let e = build(&opts, &()).unwrap_err().to_string();
     assert!(e.contains("missing.ogg") || e.contains("broken.bvh"), "{e}");
 }
+
+/// `mirror` adds the left–right mirror image of every training take as its own clip, warped
+/// onto the song like the take itself; the held-out take is not mirrored.
+#[test]
+fn mirror_adds_mirrored_training_takes_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = BuildOptions::pseudo(
+        &out,
+        vec![
+            common::salsa("60_01_scaled.bvh"),
+            common::salsa("61_01_scaled.bvh"),
+        ],
+        vec![common::song("metal_madness.ogg")],
+    );
+    opts.hold_out = vec!["61_01_scaled".into()];
+    opts.mirror = true;
+    let m = build(&opts, &()).expect("build").manifest;
+    print!("{}", summary_table(&m));
+    let names: Vec<&str> = m.clips.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["60_01_scaled", "60_01_scaled_mirror", "61_01_scaled"],
+        "one mirrored clip, of the training take"
+    );
+    assert_eq!(m.held_out, vec!["61_01_scaled".to_string()]);
+    let clip = |n: &str| m.clips.iter().find(|c| c.name == n).unwrap();
+    let (orig, mirr) = (clip("60_01_scaled"), clip("60_01_scaled_mirror"));
+    assert_eq!(mirr.genre, "salsa");
+    assert!(!mirr.motion.starts_with("held_out/"));
+    let load = |c: &dancegen_dataset::ClipEntry| match load_motion_file(&out.join(&c.motion)) {
+        Ok(LoadedMotion::Smpl(s)) => s,
+        _ => panic!("{}: not an SMPL motion", c.motion),
+    };
+    // The mirror image moves as much as the take: its kinematic beats are the take's, so the
+    // warp matches about as many of them.
+    let (wo, wm) = (orig.warp.as_ref().unwrap(), mirr.warp.as_ref().unwrap());
+    assert!(
+        (wo.motion_beats as i64 - wm.motion_beats as i64).abs() <= 2,
+        "{wo:?} vs {wm:?}"
+    );
+    // Mirrored across x: where the take's root is right of its mean path, the mirror's is
+    // left (the warps of the two differ a little, so compared on average).
+    let (a, b) = (load(orig), load(mirr));
+    let mean_x = |s: &dancegen_motion::repr::motion::SmplMotion| {
+        s.trans.chunks_exact(3).map(|p| p[0] as f64).sum::<f64>() / s.frames() as f64
+    };
+    let (xa, xb) = (mean_x(&a), mean_x(&b));
+    println!("mean root x: take {xa:.3} m, mirror {xb:.3} m");
+    assert!(xa.abs() > 0.05, "the take's mean root x is {xa} m");
+    assert!(
+        (xa + xb).abs() < 0.1 * xa.abs(),
+        "mean root x {xa} vs mirrored {xb}"
+    );
+}
