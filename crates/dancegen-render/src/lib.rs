@@ -493,9 +493,9 @@ mod tests {
         }
         assert!(counts[1] > 500.0, "{} inner figure pixels", counts[1]);
         for (kind, name) in [(0, "background"), (1, "figure")] {
-            for c in 0..3 {
-                let got = sums[kind][0][c] / counts[kind];
-                let exp = sums[kind][1][c] / counts[kind];
+            let [decoded, rendered] = sums[kind];
+            for (c, (d, r)) in decoded.iter().zip(rendered).enumerate() {
+                let (got, exp) = (d / counts[kind], r / counts[kind]);
                 assert!(
                     (got - exp).abs() < 3.0,
                     "{name} channel {c}: decoded {got:.2}, rendered {exp:.2}"
