@@ -14,7 +14,8 @@
 //!   [`penetration`]: self-penetration of forearms/hands on a capsule body (our approximation
 //!   of Lodge++'s mesh-based ratio);
 //!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
-//!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation.
+//!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation;
+//!   [`genre`]: a nearest-centroid genre classifier on kinetic features (our genre-control check).
 //!
 //! Inputs are global joint positions, SMPL 24-joint order, **Y-up**, metres, flattened C order
 //! `(T, 24, 3)`: value `joints[(t * 24 + j) * 3 + c]`. No files, no framework: plain slices in,
@@ -75,6 +76,7 @@ pub mod duet;
 pub mod fid;
 pub mod foot_skating;
 pub mod foot_skating_duration;
+pub mod genre;
 pub mod group;
 pub mod kinetic;
 pub mod longform;
