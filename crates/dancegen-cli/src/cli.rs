@@ -246,8 +246,8 @@ pub struct EvalArgs {
     /// (T, 24, 3) in metres, Y-up, or group scenes (N, T, 24, 3)).
     #[arg(long, required = true, num_args = 1..)]
     pub pred: Vec<PathBuf>,
-    /// Ground-truth motion (files or directories); needed by fid_*, mpjpe, gmr and the *_gt
-    /// values.
+    /// Ground-truth motion (files or directories); needed by fid_*, mpjpe, gmr, genre and the
+    /// *_gt values.
     #[arg(long, num_args = 1..)]
     pub gt: Vec<PathBuf>,
     /// Duets: the leader of each --pred (follower) clip, matched by file stem. Without it, a
@@ -265,9 +265,16 @@ pub struct EvalArgs {
     pub fps: Option<f64>,
     /// Comma-separated metrics (default: all that the inputs allow; duet metrics by default only
     /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,penetration,gmr,gmc,tif,
-    /// fid_cd,div_cd,bed,freeze,boundary_jerk.
+    /// fid_cd,div_cd,bed,ipr,contact_range,freeze,boundary_jerk,genre.
     #[arg(long)]
     pub metrics: Option<String>,
+    /// Genre check: the data set manifest (`dancegen dataset build`'s manifest.json) giving the
+    /// genre of each --gt clip; a --gt file matches the clip whose name is its file stem.
+    #[arg(long, value_name = "MANIFEST.json")]
+    pub gt_genres: Option<PathBuf>,
+    /// Genre check: the genre the --pred dances were asked for.
+    #[arg(long, value_name = "NAME")]
+    pub want_genre: Option<String>,
     /// Beat-align-score variant.
     #[arg(long, value_enum, default_value_t = BasVariantArg::Bailando)]
     pub bas_variant: BasVariantArg,

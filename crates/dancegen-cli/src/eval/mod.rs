@@ -20,11 +20,17 @@
 //!   `[leader, follower]`. `fid_cd` (needs GT duets), `div_cd` over the set; per duet `bed`,
 //!   `ipr` (share of frames in which the two capsule bodies intersect) and `contact_range`
 //!   (share of frames within `dancegen_metrics::duet::CONTACT_RANGE_M` of touching).
+//! - Genre control: `genre` (needs `--gt`, `--gt-genres` and `--want-genre`) fits a
+//!   nearest-centroid classifier on the kinetic features of the `--gt` clips (the `fid_k`
+//!   features under the same protocol, genres from the data set manifest) and reports the share
+//!   of `--pred` dancers it assigns to the requested genre, with chance levels and the
+//!   classifier's leave-one-out accuracy on the real clips; per clip, the assigned genre.
 //!
 //! A set value is the mean over the clips where the metric is defined; undefined clips are
 //! `null` in `per_clip` and warned about.
 
 mod duet;
+mod genre;
 mod group;
 mod input;
 mod report;
@@ -42,7 +48,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 20] = [
+const METRICS: [&str; 21] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -63,6 +69,7 @@ const METRICS: [&str; 20] = [
     "contact_range",
     "freeze",
     "boundary_jerk",
+    "genre",
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
@@ -90,6 +97,8 @@ struct Offer {
     gt_groups: bool,
     pred_duets: bool,
     gt_duets: bool,
+    gt_genres: bool,
+    want_genre: bool,
 }
 
 impl Offer {
@@ -107,6 +116,15 @@ impl Offer {
             }
             "div_cd" | "bed" | "ipr" | "contact_range" if !self.pred_duets => {
                 Err("needs duets in --pred (--leader, or two-dancer clips)")
+            }
+            "genre" if !self.gt => {
+                Err("needs --gt (the real clips the genre classifier is fit on)")
+            }
+            "genre" if !self.gt_genres => {
+                Err("needs --gt-genres (the data set manifest giving each --gt clip's genre)")
+            }
+            "genre" if !self.want_genre => {
+                Err("needs --want-genre (the genre the --pred dances were asked for)")
             }
             _ => Ok(()),
         }
@@ -180,6 +198,8 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         gt_groups: gt.iter().any(Clip::is_group),
         pred_duets: pred_pairs.iter().any(Option::is_some),
         gt_duets: gt_pairs.iter().any(Option::is_some),
+        gt_genres: args.gt_genres.is_some(),
+        want_genre: args.want_genre.is_some(),
     };
     let metrics: Vec<String> = match requested {
         Some(list) => {
@@ -234,16 +254,34 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         fid_div(&mut summary, &g, &p, "fid_cd", "div_cd", want);
     }
 
+    // Genre control: one classifier fit on the GT, every pred dancer classified.
+    let genres = match (&args.gt_genres, &args.want_genre) {
+        (Some(manifest), Some(want_genre)) if want("genre") => {
+            let r = genre::check(&pred, &gt, manifest, want_genre, &protocol)?;
+            summary.insert("genre".into(), r.summary);
+            Some(r.per_clip)
+        }
+        _ => None,
+    };
+
     // Per-clip metrics.
     let gt_by_stem: BTreeMap<String, &Clip> = gt.iter().map(|c| (c.stem(), c)).collect();
     let mut per_clip = Vec::new();
     let mut columns: BTreeMap<&str, Vec<Option<f64>>> = BTreeMap::new();
     let mut fsd_all = Vec::new();
-    for (clip, pair) in pred.iter().zip(&pred_pairs) {
+    for (i, (clip, pair)) in pred.iter().zip(&pred_pairs).enumerate() {
         let mut row = serde_json::Map::new();
         row.insert("file".into(), json!(clip.path.display().to_string()));
         row.insert("frames".into(), json!(clip.frames()));
         row.insert("dancers".into(), json!(clip.dancers.len()));
+        if let Some(g) = &genres {
+            // A solo clip's genre, or one per dancer of a scene.
+            let v = match g[i].as_slice() {
+                [one] => json!(one),
+                many => json!(many),
+            };
+            row.insert("genre".into(), v);
+        }
         for m in PER_CLIP.into_iter().filter(|m| want(m)) {
             let (v, quiet_none) = match m {
                 "bas" => (solo::clip_bas(clip, music, variant)?, false),

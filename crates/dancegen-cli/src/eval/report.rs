@@ -18,10 +18,24 @@ pub fn print_table(
         protocol.name
     );
     for (k, v) in summary {
-        match v.as_f64() {
+        print_value(k, v);
+    }
+}
+
+/// One line per value; an object (the `genre` report) as `key.field` lines.
+fn print_value(k: &str, v: &Value) {
+    match v {
+        Value::Object(fields) => {
+            for (f, x) in fields {
+                print_value(&format!("{k}.{f}"), x);
+            }
+        }
+        Value::String(s) => println!("{k:<14} {s}"),
+        Value::Number(n) if n.is_u64() || n.is_i64() => println!("{k:<14} {n}"),
+        _ => match v.as_f64() {
             Some(x) => println!("{k:<14} {x:.6}"),
             None => println!("{k:<14} undefined"),
-        }
+        },
     }
 }
 
