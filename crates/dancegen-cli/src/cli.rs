@@ -459,6 +459,10 @@ pub struct DatasetBuildArgs {
     /// held-out motions are not mirrored). Pseudo pairing only.
     #[arg(long)]
     pub mirror: bool,
+    /// Pair each training motion with its N best songs (the further pairings are clips
+    /// `<name>__<song>`; held-out motions get one). Pseudo pairing only.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub songs_per_motion: usize,
     /// Motion or song file names (without extension) to keep out of training.
     #[arg(long = "hold-out", num_args = 1.., value_name = "STEM")]
     pub hold_out: Vec<String>,

@@ -49,6 +49,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         seed: args.seed,
         warp: WarpParams::default(),
         mirror: args.mirror,
+        songs_per_motion: args.songs_per_motion,
     };
     let pb = ProgressBar::new(0);
     if quiet {

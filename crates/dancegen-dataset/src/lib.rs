@@ -103,6 +103,10 @@ pub struct BuildOptions {
     /// [`SmplMotion::mirror`], as EDGE and Lodge augment); held-out motions are never mirrored.
     /// Pseudo pairing only.
     pub mirror: bool,
+    /// Training takes are paired with this many songs, best first (1: only the best; the
+    /// further pairings are clips `<name>__<song>`); held-out takes always with one. Pseudo
+    /// pairing only.
+    pub songs_per_motion: usize,
 }
 
 impl BuildOptions {
@@ -119,6 +123,7 @@ impl BuildOptions {
             seed: 0,
             warp: WarpParams::default(),
             mirror: false,
+            songs_per_motion: 1,
         }
     }
 }
@@ -424,6 +429,16 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
     {
         return Err(DatasetError::Options("--genre must not be empty".into()));
     }
+    if opts.songs_per_motion == 0 {
+        return Err(DatasetError::Options(
+            "--songs-per-motion must be at least 1".into(),
+        ));
+    }
+    if opts.songs_per_motion > 1 && opts.pairing != Pairing::Pseudo {
+        return Err(DatasetError::Options(
+            "--songs-per-motion works with --pairing pseudo only".into(),
+        ));
+    }
     if opts.mirror && opts.pairing != Pairing::Pseudo {
         return Err(DatasetError::Options(
             "--mirror works with --pairing pseudo only (a couple or a data set layout is not \
@@ -692,20 +707,36 @@ pub(crate) fn best_song(
     opts: &BuildOptions,
     name: &str,
 ) -> Option<(usize, Vec<PiecePlan>)> {
+    ranked_songs(joints, frames, songs, candidates, opts, name)
+        .into_iter()
+        .next()
+}
+
+/// Every candidate song with its plan, best first: most matched beats per minute; exact ties
+/// keep the order of the candidates rotated by `--seed`.
+pub(crate) fn ranked_songs(
+    joints: &[f64],
+    frames: usize,
+    songs: &[Song],
+    candidates: &[usize],
+    opts: &BuildOptions,
+    name: &str,
+) -> Vec<(usize, Vec<PiecePlan>)> {
     let minutes = frames as f64 / f64::from(FPS) / 60.0;
     let n = candidates.len();
-    let mut best: Option<(f64, usize, Vec<PiecePlan>)> = None;
-    for k in 0..n {
-        let si = candidates[(k + opts.seed as usize % n) % n];
-        let plan = plan_song(joints, frames, &songs[si], &opts.warp);
-        let matched: usize = plan.iter().map(|p| p.matched.pairs.len()).sum();
-        let score = matched as f64 / minutes;
-        tracing::debug!("{name} x {}: {score:.1} matched beats/min", songs[si].name);
-        if best.as_ref().is_none_or(|(b, _, _)| score > *b) {
-            best = Some((score, si, plan));
-        }
-    }
-    best.map(|(_, si, plan)| (si, plan))
+    let mut ranked: Vec<(f64, usize, Vec<PiecePlan>)> = (0..n)
+        .map(|k| {
+            let si = candidates[(k + opts.seed as usize % n) % n];
+            let plan = plan_song(joints, frames, &songs[si], &opts.warp);
+            let matched: usize = plan.iter().map(|p| p.matched.pairs.len()).sum();
+            let score = matched as f64 / minutes;
+            tracing::debug!("{name} x {}: {score:.1} matched beats/min", songs[si].name);
+            (score, si, plan)
+        })
+        .collect();
+    // Stable: equal scores stay in the rotated order (the first one is what `best_song` took).
+    ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
+    ranked.into_iter().map(|(_, si, plan)| (si, plan)).collect()
 }
 
 /// Picks the song and produces the warped clips of one dancer.
@@ -726,13 +757,44 @@ fn pair_unit(
         return Ok(Vec::new());
     }
     let joints = world_joints(m, &unit.source)?;
-    let Some((si, plan)) = best_song(&joints, frames, songs, candidates, opts, &unit.name) else {
+    let ranked = ranked_songs(&joints, frames, songs, candidates, opts, &unit.name);
+    if ranked.is_empty() {
         return Err(DatasetError::Options(format!(
             "{}: no song to pair with",
             unit.source.display()
         )));
+    }
+    // A held-out take is measured once, against its best song.
+    let keep = if held(&unit.stem) {
+        1
+    } else {
+        opts.songs_per_motion.max(1)
     };
-    let song = &songs[si];
+    let mut clips = Vec::new();
+    for (rank, (si, plan)) in ranked.into_iter().take(keep).enumerate() {
+        let song = &songs[si];
+        // The best song keeps the plain name; further pairings name their song.
+        let base = if rank == 0 {
+            unit.name.clone()
+        } else {
+            format!("{}__{}", unit.name, song.name)
+        };
+        clips.extend(warp_plan(unit, &joints, song, plan, &base, &held)?);
+    }
+    Ok(clips)
+}
+
+/// The warped clips of `unit` on `song` by `plan` (one per piece), named `base` or
+/// `base_<k>`.
+fn warp_plan(
+    unit: &MotionUnit,
+    joints: &[f64],
+    song: &Song,
+    plan: Vec<PiecePlan>,
+    base: &str,
+    held: &impl Fn(&str) -> bool,
+) -> Result<Vec<ClipData>, DatasetError> {
+    let m = &unit.motion;
     let pieces = plan.len();
     let mut clips = Vec::new();
     for (k, piece) in plan.into_iter().enumerate() {
@@ -745,9 +807,9 @@ fn pair_unit(
         let (start, warped) = warp_motion(&src, &piece.matched.map, song.frames());
         let n = warped.frames();
         let name = if pieces == 1 {
-            unit.name.clone()
+            base.to_string()
         } else {
-            format!("{}_{k}", unit.name)
+            format!("{base}_{k}")
         };
         if n < MIN_CLIP_FRAMES {
             tracing::warn!("{name}: only {n} frames fit in {}, skipped", song.name);

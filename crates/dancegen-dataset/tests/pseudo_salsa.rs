@@ -200,3 +200,64 @@ fn mirror_adds_mirrored_training_takes_only() {
         "mean root x {xa} vs mirrored {xb}"
     );
 }
+
+/// `songs_per_motion` pairs a training take with its best songs, each warp its own clip named
+/// after its song; the held-out take is paired once.
+#[test]
+fn songs_per_motion_pairs_training_takes_with_several_songs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = BuildOptions::pseudo(
+        &out,
+        vec![
+            common::salsa("60_10_scaled.bvh"),
+            common::salsa("61_10_scaled.bvh"),
+        ],
+        vec![
+            common::song("metal_madness.ogg"),
+            common::song("escape_from_chaosland.ogg"),
+        ],
+    );
+    opts.hold_out = vec!["61_10_scaled".into()];
+    opts.songs_per_motion = 2;
+    let m = build(&opts, &()).expect("build").manifest;
+    print!("{}", summary_table(&m));
+    assert_eq!(
+        m.clips.len(),
+        3,
+        "two pairings of the training take, one of the held-out take"
+    );
+    let first = m.clips.iter().find(|c| c.name == "60_10_scaled").unwrap();
+    let other = m
+        .clips
+        .iter()
+        .find(|c| c.name.starts_with("60_10_scaled__"))
+        .expect("a second pairing");
+    assert_ne!(first.source_song, other.source_song);
+    let song_stem = std::path::Path::new(&other.source_song)
+        .file_stem()
+        .unwrap()
+        .to_str()
+        .unwrap();
+    assert_eq!(other.name, format!("60_10_scaled__{song_stem}"));
+    assert!(
+        other.warp.as_ref().unwrap().matched_beats
+            <= first.warp.as_ref().unwrap().matched_beats + 1,
+        "the best song first (by matched beats per minute)"
+    );
+    assert_eq!(
+        m.clips
+            .iter()
+            .filter(|c| c.name.starts_with("61_10"))
+            .count(),
+        1
+    );
+    // 0 songs per motion is refused.
+    opts.songs_per_motion = 0;
+    assert!(
+        build(&opts, &())
+            .unwrap_err()
+            .to_string()
+            .contains("at least 1")
+    );
+}
