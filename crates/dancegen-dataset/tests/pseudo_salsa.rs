@@ -6,20 +6,27 @@ use dancegen_dataset::warp::MAX_TEMPO_CHANGE;
 use dancegen_dataset::{BuildOptions, DatasetError, Manifest, PairingKind, build, summary_table};
 use dancegen_motion::formats::{LoadedMotion, load_motion_file};
 
+/// Both partners of CMU salsa take `take` (`60_<take>`, `61_<take>`) with `songs`, the `61`
+/// partner held out.
+fn couple_take(out: &std::path::Path, take: &str, songs: &[&str]) -> BuildOptions {
+    let mut opts = BuildOptions::pseudo(
+        out,
+        vec![
+            common::salsa(&format!("60_{take}_scaled.bvh")),
+            common::salsa(&format!("61_{take}_scaled.bvh")),
+        ],
+        songs.iter().map(|s| common::song(s)).collect(),
+    );
+    opts.hold_out = vec![format!("61_{take}_scaled")];
+    opts
+}
+
 #[test]
 fn salsa_take_is_warped_onto_metal_madness() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("set");
-    let mut opts = BuildOptions::pseudo(
-        &out,
-        vec![
-            common::salsa("60_01_scaled.bvh"),
-            common::salsa("61_01_scaled.bvh"),
-        ],
-        vec![common::song("metal_madness.ogg")],
-    );
     // The partner is held out; with no held-out song it is paired with any song.
-    opts.hold_out = vec!["61_01_scaled".into()];
+    let opts = couple_take(&out, "01", &["metal_madness.ogg"]);
     let t0 = std::time::Instant::now();
     let report = build(&opts, &()).expect("build");
     println!("built in {:.1} s", t0.elapsed().as_secs_f64());
@@ -104,18 +111,12 @@ fn training_motion_without_a_training_song_is_an_error() {
 fn held_out_song_pairs_only_with_held_out_motions() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("set");
-    let mut opts = BuildOptions::pseudo(
+    let mut opts = couple_take(
         &out,
-        vec![
-            common::salsa("60_10_scaled.bvh"),
-            common::salsa("61_10_scaled.bvh"),
-        ],
-        vec![
-            common::song("metal_madness.ogg"),
-            common::song("escape_from_chaosland.ogg"),
-        ],
+        "10",
+        &["metal_madness.ogg", "escape_from_chaosland.ogg"],
     );
-    opts.hold_out = vec!["escape_from_chaosland".into(), "61_10_scaled".into()];
+    opts.hold_out.push("escape_from_chaosland".into());
     let m = build(&opts, &()).expect("build").manifest;
     print!("{}", summary_table(&m));
     assert_eq!(m.clips.len(), 2);
@@ -152,15 +153,7 @@ fn bad_input_names_the_file() {
 fn mirror_adds_mirrored_training_takes_only() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("set");
-    let mut opts = BuildOptions::pseudo(
-        &out,
-        vec![
-            common::salsa("60_01_scaled.bvh"),
-            common::salsa("61_01_scaled.bvh"),
-        ],
-        vec![common::song("metal_madness.ogg")],
-    );
-    opts.hold_out = vec!["61_01_scaled".into()];
+    let mut opts = couple_take(&out, "01", &["metal_madness.ogg"]);
     opts.mirror = true;
     let m = build(&opts, &()).expect("build").manifest;
     print!("{}", summary_table(&m));
@@ -207,18 +200,11 @@ fn mirror_adds_mirrored_training_takes_only() {
 fn songs_per_motion_pairs_training_takes_with_several_songs() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("set");
-    let mut opts = BuildOptions::pseudo(
+    let mut opts = couple_take(
         &out,
-        vec![
-            common::salsa("60_10_scaled.bvh"),
-            common::salsa("61_10_scaled.bvh"),
-        ],
-        vec![
-            common::song("metal_madness.ogg"),
-            common::song("escape_from_chaosland.ogg"),
-        ],
+        "10",
+        &["metal_madness.ogg", "escape_from_chaosland.ogg"],
     );
-    opts.hold_out = vec!["61_10_scaled".into()];
     opts.songs_per_motion = 2;
     let m = build(&opts, &()).expect("build").manifest;
     print!("{}", summary_table(&m));
