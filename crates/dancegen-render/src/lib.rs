@@ -461,9 +461,9 @@ mod tests {
         // Mean colours of the background and of the figure's inner pixels (two pixels from
         // any edge, where 4:2:0 chroma does not mix in the floor) stay within 3 levels per
         // channel (measured on 100 preview frames: decoded minus rendered means −0.9 to −1.2
-        // per channel over all pixels). A wrong range moves the
-        // near-white floor by about 15 levels (limited range maps v to 16 + 219/255·v); a Y
-        // offset of 8 instead of 16 already fails the PSNR bound above (27 dB).
+        // per channel over all pixels). A wrong range moves the near-white floor by about 15
+        // levels (limited range maps v to 16 + 219/255·v); a Y offset of 8 instead of 16
+        // already fails the PSNR bound above (27 dB).
         let (wi, hi) = (w as usize, h as usize);
         let mut sums = [[[0.0f64; 3]; 2]; 2];
         let mut counts = [0.0f64; 2];
