@@ -144,6 +144,11 @@ pub struct GenerateArgs {
     /// pinning planted feet (post-processing steps, not part of Lodge++).
     #[arg(long)]
     pub no_foot_lock: bool,
+    /// Leave the timing as generated: no time warp moving the dance's beats onto the song's
+    /// (solo) or the follower's onto the leader's (duet); post-processing, not part of Lodge++
+    /// or ReactDance; the playback speed stays within ±15 %.
+    #[arg(long)]
+    pub no_beat_align: bool,
 }
 
 #[derive(Args, Debug)]
@@ -443,6 +448,16 @@ pub enum PairingArg {
     Finedance,
 }
 
+/// `FROM=TO` of `--merge-genre`.
+fn parse_merge(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((from, to)) if !from.trim().is_empty() && !to.trim().is_empty() => {
+            Ok((from.trim().to_string(), to.trim().to_string()))
+        }
+        _ => Err(format!("{s:?}: expected FROM=TO, e.g. whirl=modern")),
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct DatasetBuildArgs {
     /// Motion files or directories (.bvh, .pkl, .npz, .npy); BVH is retargeted to SMPL 24.
@@ -463,6 +478,10 @@ pub struct DatasetBuildArgs {
     /// `<name>__<song>`; held-out motions get one). Pseudo pairing only.
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub songs_per_motion: usize,
+    /// Relabel a genre after pairing, FROM=TO (repeatable), e.g. `whirl=modern` to fold a genre
+    /// with too few takes to learn into a related one.
+    #[arg(long = "merge-genre", value_name = "FROM=TO", value_parser = parse_merge)]
+    pub merge_genre: Vec<(String, String)>,
     /// Motion or song file names (without extension) to keep out of training.
     #[arg(long = "hold-out", num_args = 1.., value_name = "STEM")]
     pub hold_out: Vec<String>,

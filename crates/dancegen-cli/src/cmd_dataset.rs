@@ -50,6 +50,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         warp: WarpParams::default(),
         mirror: args.mirror,
         songs_per_motion: args.songs_per_motion,
+        merge_genres: args.merge_genre.clone(),
     };
     let pb = ProgressBar::new(0);
     if quiet {

@@ -32,9 +32,11 @@ pub mod error;
 pub mod genre;
 pub mod layouts;
 pub mod manifest;
-pub mod warp;
+/// The beat warp lives in the motion crate (the generation library aligns generated dances with
+/// it too); re-exported under its old path.
+pub use dancegen_motion::beat_warp as warp;
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -107,6 +109,10 @@ pub struct BuildOptions {
     /// further pairings are clips `<name>__<song>`); held-out takes always with one. Pseudo
     /// pairing only.
     pub songs_per_motion: usize,
+    /// Genres relabelled after pairing, `(from, to)`: a genre with too few takes to learn on
+    /// its own is folded into a related one (e.g. the single CMU "dance, whirl" take into
+    /// `modern`). Applied to every pairing's manifest.
+    pub merge_genres: Vec<(String, String)>,
 }
 
 impl BuildOptions {
@@ -124,6 +130,7 @@ impl BuildOptions {
             warp: WarpParams::default(),
             mirror: false,
             songs_per_motion: 1,
+            merge_genres: Vec::new(),
         }
     }
 }
@@ -446,13 +453,44 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
                 .into(),
         ));
     }
-    let clips = match opts.pairing {
+    let merges = merge_table(&opts.merge_genres)?;
+    let mut clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
         Pairing::Duet => duet::build_duet(opts, progress)?,
         Pairing::Dd100 => dd100::build_dd100(opts, progress)?,
         Pairing::Aistpp | Pairing::FineDance => layouts::build_layout(opts, progress)?,
     };
+    for c in &mut clips {
+        if let Some(to) = merges.get(&c.genre) {
+            c.genre = to.clone();
+        }
+    }
     finish(&opts.out, clips)
+}
+
+/// `--merge-genre` pairs as a map, names normalised like `--genre`; a genre merged into one
+/// that is itself merged away, or merged twice, is an error (the result would depend on order).
+fn merge_table(pairs: &[(String, String)]) -> Result<BTreeMap<String, String>, DatasetError> {
+    let mut map = BTreeMap::new();
+    for (from, to) in pairs {
+        let (from, to) = (genre::normalize(from), genre::normalize(to));
+        if from.is_empty() || to.is_empty() || from == to {
+            return Err(DatasetError::Options(format!(
+                "--merge-genre {from:?}={to:?}: give two different, non-empty genre names"
+            )));
+        }
+        if map.insert(from.clone(), to).is_some() {
+            return Err(DatasetError::Options(format!(
+                "--merge-genre: {from:?} is merged twice"
+            )));
+        }
+    }
+    if let Some(to) = map.values().find(|to| map.contains_key(*to)) {
+        return Err(DatasetError::Options(format!(
+            "--merge-genre: {to:?} is both merged into and merged away"
+        )));
+    }
+    Ok(map)
 }
 
 fn finish(out: &Path, mut clips: Vec<ClipEntry>) -> Result<BuildReport, DatasetError> {
@@ -942,6 +980,22 @@ pub fn summary_table(m: &Manifest) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn merge_genre_table_checks_its_pairs() {
+        let pair = |a: &str, b: &str| (a.to_string(), b.to_string());
+        let map = merge_table(&[pair("whirl", "modern"), pair("Popping", "break")]).unwrap();
+        assert_eq!(map.get("whirl").map(String::as_str), Some("modern"));
+        assert_eq!(map.get("popping").map(String::as_str), Some("break"));
+        for bad in [
+            vec![pair("whirl", "whirl")],
+            vec![pair("whirl", "modern"), pair("whirl", "break")],
+            vec![pair("whirl", "modern"), pair("modern", "break")],
+        ] {
+            let e = merge_table(&bad).unwrap_err().to_string();
+            assert!(e.contains("--merge-genre"), "{e}");
+        }
+    }
 
     #[test]
     fn long_motions_are_split_to_fit_the_song() {

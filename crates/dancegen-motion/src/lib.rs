@@ -5,6 +5,7 @@
 //! rotation layout) are stated once, in [`conventions`]; importers and exporters convert at the
 //! edge.
 pub mod aistpp;
+pub mod beat_warp;
 pub mod bvh;
 pub mod bvh_motion;
 pub mod capsule_body;

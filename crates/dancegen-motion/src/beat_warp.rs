@@ -1,5 +1,7 @@
-//! Beat-warp pseudo-pairing: a monotone piecewise-linear time map from motion time to music time
-//! whose anchors put kinematic beats on music beats, and the resampling of a motion through it.
+//! Beat warp: a monotone piecewise-linear time map from motion time to music time whose anchors
+//! put kinematic beats on music beats, and the resampling of a motion through it. The data set
+//! builder pseudo-pairs real motion with songs by it ([`match_beats`]); the generation library
+//! moves a generated dance's beats onto its song's, keeping its length ([`match_beats_in_span`]).
 //!
 //! The map is found by a dynamic program over (motion beat, music beat) pairs: a chain of pairs
 //! `(a_i1, b_j1), (a_i2, b_j2), ...` with strictly increasing indices on both sides, every
@@ -9,8 +11,8 @@
 //! linear; before the first and after the last anchor it continues with the neighbouring
 //! segment's rate.
 
-use dancegen_motion::Quat;
-use dancegen_motion::repr::motion::{POSE_DIMS, SMPL_JOINTS, SmplMotion};
+use crate::Quat;
+use crate::repr::motion::{POSE_DIMS, SMPL_JOINTS, SmplMotion};
 
 /// Largest local tempo change of the warped motion: its playback speed stays within ±15 %
 /// (`Δmotion / Δmusic ∈ [0.85, 1.15]`).
@@ -202,6 +204,51 @@ pub fn match_beats(
         TimeMap::through(anchors)
     };
     BeatMatch { pairs, map }
+}
+
+/// [`match_beats`] for a motion that already spans the music: the map keeps both ends fixed
+/// (motion time 0 → music time 0, `len` → `len`) and moves as many motion beats onto music
+/// beats as the rate limits allow, all times in seconds from the start of the span. Beats
+/// outside `(0, len)` are ignored. Without any beat to match, or when no chain of matches
+/// reaches the end inside the limits, it is the identity.
+pub fn match_beats_in_span(
+    motion_beats: &[f64],
+    music_beats: &[f64],
+    len: f64,
+    p: &WarpParams,
+) -> BeatMatch {
+    let identity = BeatMatch {
+        pairs: Vec::new(),
+        map: TimeMap::shift(0.0),
+    };
+    if len.is_nan() || len <= 0.0 {
+        return identity;
+    }
+    // The span's two ends as sentinel beats on both sides: a chain from (0, 0) to (len, len).
+    let inner = |beats: &[f64]| -> Vec<f64> {
+        let mut v = vec![0.0];
+        v.extend(beats.iter().copied().filter(|&t| t > 0.0 && t < len));
+        v.push(len);
+        v
+    };
+    let (a, b) = (inner(motion_beats), inner(music_beats));
+    let (n, m) = (a.len(), b.len());
+    let Some(chain) = dp(&a, &b, p, &|i, j| i == 0 && j == 0, &|i, j| {
+        i == n - 1 && j == m - 1
+    }) else {
+        return identity;
+    };
+    let anchors: Vec<(f64, f64)> = chain.iter().map(|&(i, j)| (a[i], b[j])).collect();
+    // Pairs as indices into the caller's arrays (sentinels dropped).
+    let index_of = |beats: &[f64], t: f64| beats.iter().position(|&x| x == t);
+    let pairs = chain[1..chain.len() - 1]
+        .iter()
+        .filter_map(|&(i, j)| Some((index_of(motion_beats, a[i])?, index_of(music_beats, b[j])?)))
+        .collect();
+    BeatMatch {
+        pairs,
+        map: TimeMap::through(anchors),
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -498,6 +545,32 @@ mod tests {
         let bm = match_beats(&[], &[1.0, 2.0], 3.0, 10.0, &WarpParams::default());
         assert!(bm.pairs.is_empty());
         assert_eq!(bm.map.forward(1.5), 1.5);
+    }
+
+    /// A motion whose beats fall 0.1 s after a 0.5 s grid of music beats, spanning 10 s: the
+    /// fixed-span map keeps both ends, puts the inner beats on the grid, and stays in the rate
+    /// limits; no motion beats gives the identity.
+    #[test]
+    fn span_map_keeps_the_ends_and_moves_beats_onto_music() {
+        let p = WarpParams::default();
+        let music = grid(0.5, 0.5, 19);
+        let motion: Vec<f64> = music.iter().map(|t| t + 0.1).collect();
+        let bm = match_beats_in_span(&motion, &music, 10.0, &p);
+        assert!((bm.map.forward(0.0)).abs() < 1e-12);
+        assert!((bm.map.forward(10.0) - 10.0).abs() < 1e-9);
+        assert!(bm.pairs.len() >= 17, "{} pairs", bm.pairs.len());
+        for &(i, j) in &bm.pairs {
+            assert!((bm.map.forward(motion[i]) - music[j]).abs() < 1e-9);
+        }
+        check_rates(&bm, &p);
+        // Another tempo: whatever is matched, the ends and the rate limits hold.
+        let other = grid(0.37, 0.37, 26);
+        let bm = match_beats_in_span(&other, &music, 10.0, &p);
+        check_rates(&bm, &p);
+        assert!((bm.map.forward(10.0) - 10.0).abs() < 1e-9);
+        let none = match_beats_in_span(&[], &music, 10.0, &p);
+        assert!(none.pairs.is_empty());
+        assert!((none.map.forward(3.0) - 3.0).abs() < 1e-12);
     }
 
     #[test]
