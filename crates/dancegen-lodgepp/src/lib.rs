@@ -35,6 +35,7 @@ pub mod penetration;
 pub mod pipeline;
 pub mod planted_feet;
 pub mod primitives;
+pub mod root_flips;
 pub mod sampler;
 pub mod seams;
 pub mod training;

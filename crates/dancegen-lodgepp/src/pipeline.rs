@@ -96,6 +96,8 @@ pub struct GeneratedDance {
     pub key_motions: usize,
     /// Largest root corrections at the cue seams, metres (`seams` module).
     pub seam_correction: SeamCorrection,
+    /// Frames whose root orientation flip was repaired ([`crate::root_flips`]).
+    pub root_flips_repaired: usize,
 }
 
 impl SoloModel {
@@ -176,6 +178,13 @@ impl SoloModel {
             }
         };
         out.truncate(frames * DIMS);
+        let root_flips_repaired = crate::root_flips::repair_root_flips(&mut out);
+        if root_flips_repaired > 0 {
+            tracing::info!(
+                frames = root_flips_repaired,
+                "repaired one- to three-frame flips of the root orientation"
+            );
+        }
         if opts.foot_lock {
             let ik = crate::planted_feet::clean_planted_feet(&mut out);
             tracing::debug!(
@@ -191,6 +200,7 @@ impl SoloModel {
             windows: nwin,
             key_motions,
             seam_correction,
+            root_flips_repaired,
         })
     }
 
@@ -288,9 +298,9 @@ impl SoloModel {
         Ok(out)
     }
 
-    /// A library clip `[8, 151]` for the coarse frames `[start, start + 8)`, with the coarse
-    /// dance's root orientation.
-    fn retrieve(&self, coarse: &[f32], start: usize) -> Vec<f32> {
+    /// A library clip `[8, 151]` of `genre` for the coarse frames `[start, start + 8)`, with
+    /// the coarse dance's root orientation.
+    fn retrieve(&self, coarse: &[f32], start: usize, genre: usize) -> Vec<f32> {
         let chans = main_channels();
         // The coarse frames laid out as PDDM frames (only the main channels set).
         let mut frames = vec![0f32; PRIMITIVE_FRAMES * DIMS];
@@ -300,7 +310,7 @@ impl SoloModel {
             }
         }
         let key = key_of(&frames, DIMS, &retrieval_channels());
-        let mut clip = self.library.nearest(&key).to_vec();
+        let mut clip = self.library.nearest(&key, Some(genre)).to_vec();
         for f in 0..PRIMITIVE_FRAMES {
             for k in 0..6 {
                 let c = layout::rot6d(0, k);
@@ -351,7 +361,7 @@ impl SoloModel {
             let centres = key_centres(&in_window.iter().map(|&(_, b)| b).collect::<Vec<_>>(), n);
             for c in centres {
                 let (m, _) = in_window.iter().find(|&&(_, b)| b == c).copied().unwrap();
-                let clip = self.retrieve(&coarse, m - half);
+                let clip = self.retrieve(&coarse, m - half, opts.genre);
                 p.put(c - half, &clip, false);
                 keys += 1;
             }
@@ -363,7 +373,7 @@ impl SoloModel {
         let mut clips: Vec<f32> = (1..l)
             .flat_map(|w| {
                 let at = (w * n).min(cf - half).max(half);
-                let mut clip = self.retrieve(&coarse, at - half);
+                let mut clip = self.retrieve(&coarse, at - half, opts.genre);
                 relative_root(&mut clip, half);
                 clip
             })

@@ -82,7 +82,7 @@ fn tiny_model(device: &Device) -> SoloModel {
             f
         })
         .collect();
-    let library = PrimitiveLibrary::build([motion.as_slice()]);
+    let library = PrimitiveLibrary::build([(motion.as_slice(), Some(0))]);
     assert!(!library.is_empty());
     let config = BundleConfig {
         kind: "lodgepp".into(),

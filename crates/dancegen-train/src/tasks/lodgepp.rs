@@ -391,7 +391,9 @@ pub fn assemble_bundle(
                 reason,
             })?;
     }
-    let library = PrimitiveLibrary::build(clips.iter().map(|c| c.motion.as_slice()));
+    // Each clip tagged with its take's genre, an index into the manifest's genres, which are
+    // the PDDM run's (and so the bundle's) genres.
+    let library = PrimitiveLibrary::build(clips.iter().map(|c| (c.motion.as_slice(), c.genre)));
 
     std::fs::create_dir_all(out).map_err(|e| TrainError::io(out, e))?;
     let copy = |from: PathBuf, to: &str| -> Result<(), TrainError> {
