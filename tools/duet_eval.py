@@ -46,6 +46,8 @@ CONFIGS = [
     ("full", "ReactDance (full system: BLC + layer-wise guidance + separation)", "blc"),
     ("no_separation", "w/o couple separation (`--no-separation`; the model's raw placement)",
      "blc"),
+    ("no_beat_align", "w/o beat alignment (`--no-beat-align`; the follower's timing as generated)",
+     "blc"),
     ("single_cfg", "single-scale CFG (`--guidance 2.0`, s = 1 on every level)", "blc"),
     ("autoregressive", "autoregressive sampling (`--sampler autoregressive`, w/o BLC)",
      "autoregressive"),

@@ -7,7 +7,7 @@
 #
 # Environment (all optional):
 #   SEEDS="0 1 2"        seeds per configuration
-#   CONFIGS="full no_global no_foot_refine no_pen_guidance no_foot_lock edge"
+#   CONFIGS="full no_global no_foot_refine no_pen_guidance no_foot_lock no_beat_align edge"
 #   LONG=1               also the whole song per configuration and seed (0: segments only)
 #   MODEL=models/lodgepp-small   GENRE=salsa
 #   DATASET=target/datasets/solo (built by `dancegen dataset build`, manifest.json + held_out/)
@@ -31,7 +31,7 @@ source "$ROOT/tools/eval_lib.sh"
 parse_eval_args "$0" "$@"
 
 SEEDS=${SEEDS:-"0 1 2"}
-CONFIGS=${CONFIGS:-"full no_global no_foot_refine no_pen_guidance no_foot_lock edge"}
+CONFIGS=${CONFIGS:-"full no_global no_foot_refine no_pen_guidance no_foot_lock no_beat_align edge"}
 LONG=${LONG:-1}
 MODEL=${MODEL:-$ROOT/models/lodgepp-small}
 GENRE=${GENRE:-salsa}
@@ -100,6 +100,7 @@ flags_of() {
         no_foot_refine) echo "--no-foot-refine" ;;
         no_pen_guidance) echo "--no-penetration-guidance" ;;
         no_foot_lock) echo "--no-foot-lock" ;;
+        no_beat_align) echo "--no-beat-align" ;;
         edge) echo "--sampler edge" ;;
         *) echo "unknown configuration $1" >&2; exit 2 ;;
     esac
@@ -223,7 +224,7 @@ WALL=$(( $(date +%s) - T0 ))
 CMD="bash tools/solo_eval.sh"
 [ "$DRY" = 1 ] && CMD="$CMD --dry-run"
 for v in SEEDS CONFIGS LONG; do
-    default=$(case $v in SEEDS) echo "0 1 2";; CONFIGS) echo "full no_global no_foot_refine no_pen_guidance no_foot_lock edge";; LONG) echo 1;; esac)
+    default=$(case $v in SEEDS) echo "0 1 2";; CONFIGS) echo "full no_global no_foot_refine no_pen_guidance no_foot_lock no_beat_align edge";; LONG) echo 1;; esac)
     [ "${!v}" != "$default" ] && CMD="$v=\"${!v}\" $CMD"
 done
 DIRTY=false

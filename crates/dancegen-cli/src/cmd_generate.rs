@@ -104,6 +104,7 @@ fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {
         foot_refine: !args.no_foot_refine,
         penetration_guidance: !args.no_penetration_guidance,
         foot_lock: !args.no_foot_lock,
+        beat_align: !args.no_beat_align,
     })
 }
 
@@ -122,6 +123,7 @@ fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOpt
         guidance_fine: args.guidance_fine,
         guidance_levels: args.guidance_levels.clone(),
         separation: !args.no_separation,
+        beat_align: !args.no_beat_align,
         ..DuetOptions::new(motion, leader.display().to_string())
     })
 }

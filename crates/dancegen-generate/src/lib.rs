@@ -28,6 +28,7 @@
 //! # Ok::<(), dancegen_generate::GenerateError>(())
 //! ```
 
+pub mod beat_align;
 pub mod error;
 pub mod generator;
 pub mod models;

@@ -81,6 +81,28 @@ impl From<String> for FollowerError {
     }
 }
 
+/// Moves `follower` horizontally out of `leader`'s body (the couple separation,
+/// [`dancegen_motion::couple_separation`]); returns the largest offset, metres. Both dancers in
+/// the same world frame.
+pub fn separate_follower(
+    follower: &mut SmplMotion,
+    leader: &SmplMotion,
+    config: &SeparationConfig,
+) -> Result<f64, String> {
+    let joints = |m: &SmplMotion| -> Result<Vec<f64>, String> {
+        let j = m.joints_world().map_err(|e| e.to_string())?;
+        Ok(j.into_iter().map(f64::from).collect())
+    };
+    let offsets = separation_offsets(&joints(follower)?, &joints(leader)?, config);
+    let mut largest = 0.0f64;
+    for (p, [dx, dz]) in follower.trans.chunks_exact_mut(3).zip(offsets) {
+        p[0] += dx as f32;
+        p[2] += dz as f32;
+        largest = largest.max(dx.hypot(dz));
+    }
+    Ok(largest)
+}
+
 /// [`generate_follower`], telling `hook` after every denoising step and stopping with
 /// [`FollowerError::Cancelled`] when it answers `Break`.
 pub fn generate_follower_hooked(
@@ -176,16 +198,7 @@ pub fn generate_follower_hooked(
     let mut separation_max_m = 0.0f64;
     let t2 = Instant::now();
     if let Some(config) = separation {
-        let joints = |m: &SmplMotion| -> Result<Vec<f64>, String> {
-            let j = m.joints_world().map_err(|e| e.to_string())?;
-            Ok(j.into_iter().map(f64::from).collect())
-        };
-        let offsets = separation_offsets(&joints(&follower)?, &joints(leader)?, config);
-        for (p, [dx, dz]) in follower.trans.chunks_exact_mut(3).zip(offsets) {
-            p[0] += dx as f32;
-            p[2] += dz as f32;
-            separation_max_m = separation_max_m.max(dx.hypot(dz));
-        }
+        separation_max_m = separate_follower(&mut follower, leader, config)?;
     }
     for p in follower.trans.chunks_exact_mut(3) {
         p[1] += floor;

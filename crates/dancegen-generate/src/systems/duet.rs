@@ -13,8 +13,9 @@ use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 use dancegen_reactdance::blc::{LatentSampling, LongForm};
 use dancegen_reactdance::bundle::DuetModel;
-use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked};
+use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked, separate_follower};
 
+use crate::beat_align::align_follower_to_leader;
 use crate::error::GenerateError;
 use crate::request::CommonOptions;
 use crate::song::{FPS, Span};
@@ -50,6 +51,9 @@ pub struct DuetOptions {
     pub guidance_levels: Vec<f64>,
     /// Move the follower out of the leader's body (hands may touch).
     pub separation: bool,
+    /// Time-warp the follower so its beats echo the leader's ([`crate::beat_align`];
+    /// post-processing, not part of ReactDance).
+    pub beat_align: bool,
 }
 
 impl DuetOptions {
@@ -63,6 +67,7 @@ impl DuetOptions {
             guidance_fine: None,
             guidance_levels: Vec::new(),
             separation: true,
+            beat_align: true,
         }
     }
 }
@@ -234,12 +239,13 @@ impl DanceSystem for Duet {
             long_form,
         };
         let separation = duet.separation.then(SeparationConfig::default);
+        // With the beat alignment the separation runs after it, on the warped follower.
         let out = generate_follower_hooked(
             model,
             leader,
             song.music(&span),
             &sampling,
-            separation.as_ref(),
+            separation.as_ref().filter(|_| !duet.beat_align),
             input.device,
             input.hook,
         )
@@ -249,6 +255,43 @@ impl DanceSystem for Duet {
                 GenerateError::Generation(format!("generating the follower: {why}"))
             }
         })?;
+        let mut follower = out.follower;
+        let mut notes = Vec::new();
+        let mut separation_max_m = out.separation_max_m;
+        let mut separate_s = out.separate_s;
+        if duet.beat_align {
+            let (aligned, a) =
+                align_follower_to_leader(&follower, leader).map_err(GenerateError::Generation)?;
+            follower = aligned;
+            tracing::info!(
+                matched = a.matched,
+                follower_beats = a.motion_beats,
+                leader_beats = a.target_beats,
+                max_tempo_change = a.max_tempo_change,
+                "beat alignment"
+            );
+            notes.push(format!(
+                "beat alignment: {} of {} leader beats echoed by a follower beat (playback \
+                 speed within ±{:.0} %)",
+                a.matched,
+                a.target_beats,
+                100.0 * a.max_tempo_change
+            ));
+            if let Some(config) = &separation {
+                let t0 = std::time::Instant::now();
+                separation_max_m = separate_follower(&mut follower, leader, config)
+                    .map_err(GenerateError::Generation)?;
+                separate_s = t0.elapsed().as_secs_f64();
+            }
+        }
+        notes.push(match separation {
+            None => "no separation".to_string(),
+            Some(_) => format!(
+                "separated from the leader by up to {:.0} mm in {:.2} s",
+                separation_max_m * 1000.0,
+                separate_s
+            ),
+        });
         Ok(Dance {
             dancers: vec![
                 Dancer {
@@ -257,7 +300,7 @@ impl DanceSystem for Duet {
                 },
                 Dancer {
                     role: Role::Follower,
-                    motion: out.follower,
+                    motion: follower,
                 },
             ],
             span,
@@ -272,14 +315,7 @@ impl DanceSystem for Duet {
                 "sampling {:.2} s, decoding {:.2} s; ",
                 out.sample_s, out.decode_s
             ),
-            notes: vec![match separation {
-                None => "no separation".to_string(),
-                Some(_) => format!(
-                    "separated from the leader by up to {:.0} mm in {:.2} s",
-                    out.separation_max_m * 1000.0,
-                    out.separate_s
-                ),
-            }],
+            notes,
         })
     }
 }

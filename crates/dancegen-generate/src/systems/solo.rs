@@ -13,6 +13,7 @@ use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 
+use crate::beat_align::align_to_beats;
 use crate::error::GenerateError;
 use crate::request::CommonOptions;
 use crate::song::FPS;
@@ -41,6 +42,9 @@ pub struct SoloOptions {
     pub penetration_guidance: bool,
     /// Planted feet stay put (root lock + leg IK; post-processing, not part of Lodge++).
     pub foot_lock: bool,
+    /// The dance's kinematic beats are moved onto the song's beats by a time warp
+    /// ([`crate::beat_align`]; post-processing, not part of Lodge++).
+    pub beat_align: bool,
 }
 
 impl Default for SoloOptions {
@@ -50,6 +54,7 @@ impl Default for SoloOptions {
             foot_refine: true,
             penetration_guidance: true,
             foot_lock: true,
+            beat_align: true,
         }
     }
 }
@@ -117,7 +122,28 @@ impl DanceSystem for Solo {
             height_m = dance.seam_correction.height,
             "largest root corrections where generated frames meet the shared boundary frames"
         );
-        let motion = to_smpl(&dance.frames)?;
+        let mut motion = to_smpl(&dance.frames)?;
+        let mut notes = Vec::new();
+        if input.options.beat_align {
+            let (aligned, a) =
+                align_to_beats(&motion, &beats).map_err(GenerateError::Generation)?;
+            motion = aligned;
+            keep_feet_above_floor(&mut motion).map_err(GenerateError::Generation)?;
+            tracing::info!(
+                matched = a.matched,
+                motion_beats = a.motion_beats,
+                music_beats = a.target_beats,
+                max_tempo_change = a.max_tempo_change,
+                "beat alignment"
+            );
+            notes.push(format!(
+                "beat alignment: {} of {} music beats met by a motion beat (playback speed \
+                 within ±{:.0} %)",
+                a.matched,
+                a.target_beats,
+                100.0 * a.max_tempo_change
+            ));
+        }
         Ok(Dance {
             dancers: vec![Dancer {
                 role: Role::Solo,
@@ -126,15 +152,19 @@ impl DanceSystem for Solo {
             span,
             summary: format!(
                 "{} frames ({:.1} s at {FPS} fps), genre {genre_name}, seed {}, {} windows, \
-                 {} key motions",
+                 {} key motions{}",
                 dance.n_frames,
                 dance.n_frames as f64 / f64::from(FPS),
                 input.common.seed,
                 dance.windows,
                 dance.key_motions,
+                match dance.root_flips_repaired {
+                    0 => String::new(),
+                    n => format!(", {n} root-flip frames repaired"),
+                },
             ),
             timing_breakdown: String::new(),
-            notes: Vec::new(),
+            notes,
         })
     }
 }
@@ -190,7 +220,13 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
     let mut m = Edge151::decode(frames).map_err(|e| motion_err(&e))?;
     m.put_on_ground_with(GroundMode::SupportFeet)
         .map_err(|e| motion_err(&e))?;
-    let joints = m.joints_world().map_err(|e| motion_err(&e))?;
+    keep_feet_above_floor(&mut m).map_err(GenerateError::Generation)?;
+    Ok(m)
+}
+
+/// Lifts every frame whose lowest foot joint is below the floor (y = 0) onto it.
+fn keep_feet_above_floor(m: &mut SmplMotion) -> Result<(), String> {
+    let joints = m.joints_world().map_err(|e| e.to_string())?;
     for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
         let low = FOOT_JOINTS
             .iter()
@@ -200,5 +236,5 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
             p[1] -= low;
         }
     }
-    Ok(m)
+    Ok(())
 }
