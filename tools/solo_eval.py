@@ -43,7 +43,8 @@ CONFIGS = [
      "--no-penetration-guidance", "lodgepp"),
     ("no_foot_lock", "w/o foot lock + leg IK post-processing (`--no-foot-lock`; not part of Lodge++)",
      "--no-foot-lock", "lodgepp"),
-    ("no_beat_align", "w/o beat alignment post-processing (`--no-beat-align`; not part of Lodge++)",
+    ("no_beat_align", "w/o beat alignment post-processing (`--no-beat-align`; not part of Lodge++; "
+     "the seam measure for the full system, whose window seams the warp moves by a few frames)",
      "--no-beat-align", "lodgepp"),
     ("edge", "EDGE-style sampler (`--sampler edge`)", "--sampler edge", "edge"),
 ]

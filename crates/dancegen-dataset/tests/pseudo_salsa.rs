@@ -247,3 +247,24 @@ fn songs_per_motion_pairs_training_takes_with_several_songs() {
             .contains("at least 1")
     );
 }
+
+/// `merge_genres` relabels the clips and the manifest's genre list after pairing; the clips
+/// themselves are those of the plain build.
+#[test]
+fn merge_genre_relabels_the_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = couple_take(&out, "01", &["metal_madness.ogg"]);
+    opts.merge_genres = vec![("salsa".into(), "latin".into())];
+    let m = build(&opts, &()).expect("build").manifest;
+    assert_eq!(m.genres, vec!["latin".to_string()]);
+    assert!(m.clips.iter().all(|c| c.genre == "latin"), "{:?}", m.clips);
+    assert_eq!(m.clips.len(), 2);
+
+    opts.merge_genres = vec![
+        ("salsa".into(), "latin".into()),
+        ("latin".into(), "x".into()),
+    ];
+    let e = build(&opts, &()).unwrap_err().to_string();
+    assert!(e.contains("both merged into and merged away"), "{e}");
+}

@@ -32,6 +32,19 @@ pub struct BeatAlignment {
     pub max_tempo_change: f64,
 }
 
+impl BeatAlignment {
+    /// One line for the run's notes; `target` names the beats met ("music", "leader").
+    pub fn note(&self, target: &str) -> String {
+        format!(
+            "beat alignment: {} of {} {target} beats met by a motion beat (playback speed within \
+             ±{:.0} %)",
+            self.matched,
+            self.target_beats,
+            100.0 * self.max_tempo_change
+        )
+    }
+}
+
 /// World joints `(T, 24, 3)` of `m` as f64.
 fn joints_f64(m: &SmplMotion) -> Result<Vec<f64>, String> {
     Ok(m.joints_world()
@@ -124,25 +137,30 @@ mod tests {
     use super::*;
     use dancegen_metrics::bas::{beat_align_score, clip_music_beats};
 
-    /// A dancer bobbing (arms and root) at 2 Hz, a fifth of a beat late on a 120 bpm song: the
-    /// alignment keeps the length and the end poses, and raises Bailando's BAS against the song.
-    #[test]
-    fn a_late_dancer_is_moved_onto_the_beat() {
-        let fps = 30.0;
+    /// 300 frames at 30 fps of a dancer bobbing (root height and both shoulders) every 15 frames
+    /// (a 120 bpm beat), `lag` frames late.
+    fn bob(lag: f64) -> SmplMotion {
         let frames = 300;
-        let lag = 3.0; // frames
         let mut m = SmplMotion {
-            fps,
+            fps: 30.0,
             poses: vec![0.0; frames * 72],
             trans: vec![0.0; frames * 3],
         };
         for f in 0..frames {
             let phase = std::f64::consts::TAU * (f as f64 - lag) / 15.0;
             m.trans[f * 3 + 1] = 0.9 + 0.05 * phase.cos() as f32;
-            // Shoulders (16, 17) swing with the bob.
             m.poses[f * 72 + 16 * 3 + 2] = 0.6 * phase.cos() as f32;
             m.poses[f * 72 + 17 * 3 + 2] = -0.6 * phase.cos() as f32;
         }
+        m
+    }
+
+    /// A dancer bobbing (arms and root) at 2 Hz, a fifth of a beat late on a 120 bpm song: the
+    /// alignment keeps the length and the end poses, and raises Bailando's BAS against the song.
+    #[test]
+    fn a_late_dancer_is_moved_onto_the_beat() {
+        let m = bob(3.0);
+        let frames = m.frames();
         let beats: Vec<usize> = (1..20).map(|k| k * 15).collect();
         let bas = |m: &SmplMotion| {
             let j: Vec<f64> = m
@@ -172,21 +190,6 @@ mod tests {
     /// alignment (Beat Echo Degree up), keeping its length.
     #[test]
     fn a_late_follower_echoes_the_leader() {
-        let bob = |lag: f64| {
-            let frames = 300;
-            let mut m = SmplMotion {
-                fps: 30.0,
-                poses: vec![0.0; frames * 72],
-                trans: vec![0.0; frames * 3],
-            };
-            for f in 0..frames {
-                let phase = std::f64::consts::TAU * (f as f64 - lag) / 15.0;
-                m.trans[f * 3 + 1] = 0.9 + 0.05 * phase.cos() as f32;
-                m.poses[f * 72 + 16 * 3 + 2] = 0.6 * phase.cos() as f32;
-                m.poses[f * 72 + 17 * 3 + 2] = -0.6 * phase.cos() as f32;
-            }
-            m
-        };
         let (leader, follower) = (bob(0.0), bob(3.0));
         let bed = |f: &SmplMotion| {
             dancegen_metrics::duet::beat_echo_degree(

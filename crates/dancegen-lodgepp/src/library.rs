@@ -7,10 +7,11 @@
 //! when the clip sits on a window boundary).
 //!
 //! Each clip carries the genre of the take it was cut from, and retrieval for a genre searches
-//! that genre's clips only. The paper's library is one genre's (FineDance's clips share a
-//! style per song); with several genres in one library, the nearest clip by pose alone is often
-//! another genre's, and the key motions, a large share of every window, then pull the dance
-//! away from the genre asked for (docs/solo-data-v2.md: break and modern were followed 0 / 6).
+//! that genre's clips only (our choice; the paper says nothing of genre in retrieval). With
+//! several genres in one library the nearest clip by pose alone may be another genre's, and
+//! key motions are a large share of every window, so a retrieval blind to genre works against
+//! the genre asked for. (It was one suspect for the v2 model's lost genre control in
+//! docs/solo-data-v2.md; with it, the v3 model still did not follow `modern`.)
 
 use std::path::Path;
 

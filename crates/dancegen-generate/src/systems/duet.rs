@@ -270,13 +270,7 @@ impl DanceSystem for Duet {
                 max_tempo_change = a.max_tempo_change,
                 "beat alignment"
             );
-            notes.push(format!(
-                "beat alignment: {} of {} leader beats echoed by a follower beat (playback \
-                 speed within ±{:.0} %)",
-                a.matched,
-                a.target_beats,
-                100.0 * a.max_tempo_change
-            ));
+            notes.push(a.note("leader"));
             if let Some(config) = &separation {
                 let t0 = std::time::Instant::now();
                 separation_max_m = separate_follower(&mut follower, leader, config)

@@ -136,13 +136,7 @@ impl DanceSystem for Solo {
                 max_tempo_change = a.max_tempo_change,
                 "beat alignment"
             );
-            notes.push(format!(
-                "beat alignment: {} of {} music beats met by a motion beat (playback speed \
-                 within ±{:.0} %)",
-                a.matched,
-                a.target_beats,
-                100.0 * a.max_tempo_change
-            ));
+            notes.push(a.note("music"));
         }
         Ok(Dance {
             dancers: vec![Dancer {
