@@ -286,7 +286,7 @@ def cmd_report(args):
     # ---- real data: the held-out motion (one "seed") and the training clips (FID calibration)
     ev = os.path.join(out, "eval")
     rj = load(os.path.join(ev, "real", "clip.json"))
-    real = {k: rj.get(k) for k in ("pfc", "fsr", "penetration", "freeze")}
+    real = {k: rj.get(k) for k in ("pfc", "fsr", "penetration", "freeze", "inverted")}
     real_bas = {c: load(os.path.join(ev, "real", f"bas_{c}.json"))["bas"] for c in clips}
     real["bas"] = mean_def(list(real_bas.values()))
     gt_paths = [os.path.join(out, "gt", c + ".npy") for c in clips]
@@ -315,7 +315,7 @@ def cmd_report(args):
             for k in SET:
                 setm[name].setdefault(k, []).append(fj.get(k))
                 setm_all[name].setdefault(k, []).append(fa.get(k))
-            row = {k: cj.get(k) for k in ("pfc", "fsr", "penetration", "freeze")}
+            row = {k: cj.get(k) for k in ("pfc", "fsr", "penetration", "freeze", "inverted")}
             row["bas"] = mean_def([load(os.path.join(ed, f"bas_{c}.json"))["bas"] for c in clips])
             paths = [os.path.join(out, "gen", name, f"seed{s}", "seg", c + ".npy") for c in clips]
             row["boundary_jerk"] = mean_def(bjerk_set(paths, sampler, cj))
@@ -323,7 +323,8 @@ def cmd_report(args):
                 seg[name].setdefault(k, []).append(v)
             lj = opt_load(os.path.join(ed, "long.json")) if args.long else None
             if lj is not None:
-                row = {k: lj.get(k) for k in ("bas", "pfc", "fsr", "penetration", "freeze")}
+                row = {k: lj.get(k)
+                       for k in ("bas", "pfc", "fsr", "penetration", "freeze", "inverted")}
                 p = os.path.join(out, "gen", name, f"seed{s}", "long", "song.npy")
                 row["boundary_jerk"] = bjerk_set([p], sampler, lj)[0]
                 for k, v in row.items():
@@ -407,6 +408,8 @@ def cmd_report(args):
       f"`boundary_jerk` on all {parity[1]} clips within {parity[0]:.1e} (relative).")
     w("- **Freezing**: share of 1-second windows whose mean joint speed is under 5 % of the "
       "clip's median speed (`dancegen eval` `freeze`).")
+    w("- **Upside down**: share of frames whose neck is below the pelvis (`dancegen eval` "
+      "`inverted`, `dancegen_metrics::posture`).")
     w("- Values are mean ± standard deviation over the seeds (n − 1); each seed's value is the "
       "mean over its clips (FID/Div: over that seed's set of clips).")
     w("")
@@ -443,6 +446,7 @@ def cmd_report(args):
         ("pfc", "PFC ↓", 3, 1.0),
         ("penetration", "Penetration % ↓", 3, 1.0),
         ("freeze", "Freeze % ↓", 2, 100.0),
+        ("inverted", "Upside down % ↓", 2, 100.0),
         ("boundary_jerk", "Boundary jerk ↓", 3, 1.0),
     ]
     w(f"## Held-out segments ({len(clips)} clips × {len(seeds)} seeds per configuration)")

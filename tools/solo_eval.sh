@@ -174,7 +174,7 @@ done
 
 # ---- evaluation
 EV=("$BIN" -q eval)
-CLIP_METRICS=pfc,fsr,penetration,freeze,boundary_jerk
+CLIP_METRICS=pfc,fsr,penetration,freeze,inverted,boundary_jerk
 eval_clips() { # dir out.json
     "${EV[@]}" --pred "$1" --protocol none --fps 30 --metrics "$CLIP_METRICS" --json "$2" >/dev/null
 }

@@ -542,3 +542,58 @@ fn window_sets_the_boundaries_of_boundary_jerk() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--window"), "{}", stderr(&o));
 }
+
+#[test]
+fn inverted_counts_upside_down_frames_of_a_real_clip() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, gt) = fixture_sets(dir.path());
+    let real = std::fs::read_dir(&gt)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let a = dancegen_io::read_npy(&real).unwrap();
+    let t = a.shape[0];
+    // The same motion turned 180° about the x axis from frame t/2 on: (x, y, z) → (x, −y, −z)
+    // around the pelvis height, so the second half stands on its head.
+    let mut flipped: Vec<f32> = a.data.iter().map(|&v| v as f32).collect();
+    for f in t / 2..t {
+        for v in flipped[f * 72..(f + 1) * 72].chunks_exact_mut(3) {
+            v[1] = 2.0 - v[1];
+            v[2] = -v[2];
+        }
+    }
+    let pred = dir.path().join("flip");
+    std::fs::create_dir(&pred).unwrap();
+    dancegen_io::write_npy_f32(&pred.join("half.npy"), &a.shape, &flipped).unwrap();
+    std::fs::copy(&real, pred.join("real.npy")).unwrap();
+    let out = dir.path().join("out.json");
+    ok(&dancegen(&[
+        "eval",
+        "--pred",
+        s(&pred),
+        "--fps",
+        "60",
+        "--metrics",
+        "inverted",
+        "--json",
+        s(&out),
+    ]));
+    let j = read_json(&out);
+    let of = |name: &str| {
+        j["per_clip"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["file"].as_str().unwrap().ends_with(name))
+            .unwrap()["inverted"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!(of("real.npy"), 0.0, "a real clip is upright");
+    let half = of("half.npy");
+    let want = (t - t / 2) as f64 / t as f64;
+    assert!((half - want).abs() < 1e-12, "{half} vs {want}");
+    assert!((j["inverted"].as_f64().unwrap() - want / 2.0).abs() < 1e-12);
+}

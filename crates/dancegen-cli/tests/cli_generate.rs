@@ -61,6 +61,14 @@ fn generates_every_format_for_a_song_segment() {
             .fold(f64::INFINITY, f64::min);
         assert!(low > -1e-4, "frame {f}: foot at {low}");
         assert!(y(0) > 0.3, "frame {f}: pelvis at {}", y(0));
+        // Right way up: the neck above the pelvis (the v2/v3 retrains stood on their heads,
+        // docs/solo-data-v2.md).
+        assert!(
+            y(12) > y(0),
+            "frame {f}: upside down (neck {} below pelvis {})",
+            y(12),
+            y(0)
+        );
         // Stays on stage: within a 6 m square around the origin.
         assert!(j[f * 72].abs() < 3.0 && j[f * 72 + 2].abs() < 3.0);
     }

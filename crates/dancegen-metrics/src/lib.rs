@@ -15,7 +15,8 @@
 //!   of Lodge++'s mesh-based ratio);
 //!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
 //!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation;
-//!   [`genre`]: a nearest-centroid genre classifier on kinetic features (our genre-control check).
+//!   [`genre`]: a nearest-centroid genre classifier on kinetic features (our genre-control check);
+//!   [`posture`]: the share of upside-down frames (our check).
 //!
 //! Inputs are global joint positions, SMPL 24-joint order, **Y-up**, metres, flattened C order
 //! `(T, 24, 3)`: value `joints[(t * 24 + j) * 3 + c]`. No files, no framework: plain slices in,
@@ -84,6 +85,7 @@ pub mod manual;
 pub mod mpjpe;
 pub mod penetration;
 pub mod pfc;
+pub mod posture;
 pub mod protocol;
 
 pub use diversity::diversity;

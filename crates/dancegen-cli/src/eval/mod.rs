@@ -5,7 +5,8 @@
 //!
 //! - Solo metrics, per clip: `bas` (needs `--beats` or `--music`), `pfc` (EDGE, on the Z-up
 //!   rotation `(x, −z, y)`), `fsr` (LODGE foot-skating ratio), `mpjpe` (against the `--gt` clip of
-//!   the same file stem), `freeze`, `boundary_jerk` (boundaries every `--window` frames, default 150:
+//!   the same file stem), `freeze`, `inverted` (share of upside-down frames, ours: see
+//!   `dancegen_metrics::posture`), `boundary_jerk` (boundaries every `--window` frames, default 150:
 //!   EDGE's 5-second windows at 30 fps), `fsd` (Duolando foot-skating duration in %, pooled over all clips' frame
 //!   steps as the reference prints it), `penetration` (percent of forearm/hand samples inside
 //!   another body part, on the capsule body: our approximation of Lodge++'s self-penetration
@@ -48,7 +49,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 21] = [
+const METRICS: [&str; 22] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -68,12 +69,13 @@ const METRICS: [&str; 21] = [
     "ipr",
     "contact_range",
     "freeze",
+    "inverted",
     "boundary_jerk",
     "genre",
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 13] = [
+const PER_CLIP: [&str; 14] = [
     "bas",
     "pfc",
     "fsr",
@@ -81,6 +83,7 @@ const PER_CLIP: [&str; 13] = [
     "mpjpe",
     "penetration",
     "freeze",
+    "inverted",
     "boundary_jerk",
     "gmc",
     "tif",

@@ -73,6 +73,7 @@ pub fn clip_metric(m: &str, p: &Prepared, window: usize) -> Result<Option<f64>> 
             dancegen_metrics::penetration::DEFAULT_SAMPLES_PER_SEGMENT,
         )?,
         "freeze" => dancegen_metrics::longform::motion_freezing(&p.joints, p.fps)?,
+        "inverted" => dancegen_metrics::posture::inverted_share(&p.joints)?,
         "boundary_jerk" => {
             let b: Vec<usize> = (1..)
                 .map(|i| i * window)
