@@ -547,12 +547,13 @@ fn window_sets_the_boundaries_of_boundary_jerk() {
 fn inverted_counts_upside_down_frames_of_a_real_clip() {
     let dir = tempfile::tempdir().unwrap();
     let (_, gt) = fixture_sets(dir.path());
-    let real = std::fs::read_dir(&gt)
+    // The first real clip by name (read_dir's order is the file system's).
+    let mut reals: Vec<_> = std::fs::read_dir(&gt)
         .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
+        .map(|e| e.unwrap().path())
+        .collect();
+    reals.sort();
+    let real = reals.swap_remove(0);
     let a = dancegen_io::read_npy(&real).unwrap();
     let t = a.shape[0];
     // The same motion turned 180° about the x axis from frame t/2 on: (x, y, z) → (x, −y, −z)
