@@ -34,6 +34,7 @@ fn main() {
             let t0 = Instant::now();
             let l = pddm_loss(
                 &model,
+                t.pddm.canonical_heading,
                 x,
                 m,
                 &vec![0; b],

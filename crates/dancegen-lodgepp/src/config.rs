@@ -70,6 +70,9 @@ pub struct PddmConfig {
     pub foot_refine: bool,
     /// Frames per window.
     pub window: usize,
+    /// Train and sample every window in its own heading frame (`crate::heading`; our fix for
+    /// data that faces every direction, not in the paper). Off in older bundles.
+    pub canonical_heading: bool,
 }
 
 impl Default for PddmConfig {
@@ -83,6 +86,7 @@ impl Default for PddmConfig {
             dropout: 0.1,
             foot_refine: true,
             window: LODGEPP_WINDOW,
+            canonical_heading: false,
         }
     }
 }

@@ -28,6 +28,7 @@ pub mod config;
 pub mod denoiser;
 pub mod discriminator;
 pub mod foot_refine;
+pub mod heading;
 pub mod kinematics;
 pub mod layout;
 pub mod library;

@@ -23,6 +23,7 @@ use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::{BOUNDARY_FRAMES, PRIMITIVE_FRAMES, TOKEN_FRAMES};
 use crate::denoiser::PddmCond;
+use crate::heading::{self, Stats};
 use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
@@ -109,6 +110,16 @@ impl SoloModel {
                 f[c] = f[c] * scale[c] + shift[c];
             }
         }
+    }
+
+    /// The denormaliser's `(scale, shift)` when the PDDM works in per-window heading frames
+    /// (`crate::heading`), else `None`.
+    fn heading_stats(&self) -> Option<(Vec<f32>, Vec<f32>)> {
+        self.config
+            .pddm
+            .pddm
+            .canonical_heading
+            .then(|| self.pddm.denorm.host())
     }
 
     fn shift(&self) -> ResidualShift {
@@ -415,6 +426,26 @@ impl SoloModel {
                 }
             }
         }
+        // Per-window heading frames: window w turned so its frame 0 faces +X; a window without
+        // a cued frame 0 (window 0) takes the coarse dance's heading there.
+        let stats = self.heading_stats();
+        let turns = stats.as_ref().map(|(scale, shift)| {
+            let stats = Stats { scale, shift };
+            let chans = main_channels();
+            let fallback: Vec<f32> = (0..l)
+                .map(|w| {
+                    let f = (w * n).min(cf - 1);
+                    let mut frame = vec![0f32; DIMS];
+                    for (k, &c) in chans.iter().enumerate() {
+                        frame[c] = coarse[f * MAIN_DIMS + k];
+                    }
+                    heading::heading(&frame, &stats)
+                })
+                .collect();
+            let t = heading::window_turns(&prims, &fallback, &stats);
+            heading::turn_cues(&mut prims, &mut cue_v, &cue_m, &t, &stats);
+            t
+        });
         let m = Self::music_windows(music, frames, n, n, l);
         let cond = self.cond(m, &prims, opts.genre, device);
         let cues = HardCues {
@@ -432,7 +463,11 @@ impl SoloModel {
             grad_device,
             hook,
         )?;
-        let x = host(x);
+        let mut x = host(x);
+        if let (Some((scale, shift)), Some(t)) = (&stats, turns) {
+            let back: Vec<f32> = t.iter().map(|a| -a).collect();
+            heading::turn_windows(&mut x, n, &back, &Stats { scale, shift });
+        }
         tracing::debug!("timing: PDDM sampling done at {:?}", started.elapsed());
         Ok((x, keys))
     }
@@ -453,6 +488,7 @@ impl SoloModel {
         let shift = self.shift();
         let mut out: Vec<f32> = Vec::with_capacity(l * n * DIMS);
         let mut prev: Option<Vec<f32>> = None;
+        let stats = self.heading_stats();
         for w in 0..l {
             let mut p = WindowPrimitives::empty(n);
             let mut cue_v = vec![0f32; n * DIMS];
@@ -464,6 +500,13 @@ impl SoloModel {
                 cue_v[..head.len()].copy_from_slice(&head);
                 cue_m[..head.len()].iter_mut().for_each(|v| *v = 1.0);
             }
+            // The window in its heading frame (the first window's is free: 0).
+            let turn = stats.as_ref().map(|(scale, shift)| {
+                let stats = Stats { scale, shift };
+                let t = heading::window_turns(std::slice::from_ref(&p), &[0.0], &stats);
+                heading::turn_cues(std::slice::from_mut(&mut p), &mut cue_v, &cue_m, &t, &stats);
+                t[0]
+            });
             let m = Self::music_windows(&music[w * adv * MUSIC_DIMS..], frames - w * adv, n, n, 1);
             let cond = self.cond(m, std::slice::from_ref(&p), opts.genre, device);
             let cues = HardCues {
@@ -474,7 +517,7 @@ impl SoloModel {
             let per_window = |_: &'static str, done: usize, total: usize| {
                 hook.on_step(DENOISING, w * total + done, l * total)
             };
-            let x = host(sample_windows_hooked(
+            let mut x = host(sample_windows_hooked(
                 &self.pddm,
                 &shift,
                 &cond,
@@ -484,6 +527,9 @@ impl SoloModel {
                 grad_device,
                 &per_window,
             )?);
+            if let (Some((scale, shift)), Some(a)) = (&stats, turn) {
+                heading::turn_windows(&mut x, n, &[-a], &Stats { scale, shift });
+            }
             out.extend_from_slice(&x);
             prev = Some(x);
         }
@@ -509,6 +555,7 @@ impl SoloModel {
         let prims: Vec<WindowPrimitives> = (0..l).map(|_| WindowPrimitives::empty(n)).collect();
         let m = Self::music_windows(music, frames, n, half, l);
         let cond = self.cond(m, &prims, opts.genre, device);
+        let stats = self.heading_stats();
         let mut win = host(crate::sampler::sample_windows_with(
             &self.pddm,
             &self.shift(),
@@ -516,18 +563,33 @@ impl SoloModel {
             &self.sample_opts(opts, opts.seed),
             device,
             grad_device,
-            |x, last| {
-                if last {
-                    x
-                } else {
-                    overwrite_first_halves_relative(x, half)
+            |x, last| match (&stats, last) {
+                (_, true) => x,
+                (None, false) => overwrite_first_halves_relative(x, half),
+                (Some((scale, shift)), false) => {
+                    let dims = x.dims();
+                    let mut h = host(x);
+                    heading::overwrite_first_halves_turned(
+                        &mut h,
+                        n,
+                        half,
+                        &Stats { scale, shift },
+                    );
+                    Tensor::from_data(TensorData::new(h, dims), device)
                 }
             },
             hook,
         )?);
         // Window-relative roots → one path: window w starts where window w − 1 is at its
-        // middle frame (`win` already holds window w − 1 in global coordinates).
+        // middle frame (`win` already holds window w − 1 in global coordinates), and, in
+        // heading frames, faces the way window w − 1 faces there.
         for w in 1..l {
+            if let Some((scale, shift)) = &stats {
+                let stats = Stats { scale, shift };
+                let prev = (w - 1) * n + half;
+                let h = heading::heading(&win[prev * DIMS..(prev + 1) * DIMS], &stats);
+                heading::turn_windows(&mut win[w * n * DIMS..(w + 1) * n * DIMS], n, &[h], &stats);
+            }
             let prev = (w - 1) * n + half;
             let origin: Vec<f32> = ROOT_HORIZONTAL
                 .iter()

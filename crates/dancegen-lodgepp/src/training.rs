@@ -96,9 +96,11 @@ pub fn root_relative(x: Tensor<3>) -> Tensor<3> {
 
 /// One PDDM training batch: windows `x` `[B, T, 151]` (normalised), `music` `[B, T, 35]`,
 /// genres; `seed` draws the timesteps, noise, primitive modes and condition dropout.
+/// `canonical_heading` turns every window into its own heading frame first (`crate::heading`).
 #[allow(clippy::too_many_arguments)]
 pub fn pddm_loss(
     model: &PddmTrainModel,
+    canonical_heading: bool,
     x: Tensor<3>,
     music: Tensor<3>,
     genre: &[usize],
@@ -110,15 +112,24 @@ pub fn pddm_loss(
     let [b, t, _] = x.dims();
     let device = x.device();
     let mut rng = SeededNoise::new(seed);
-    let d0 = root_relative(x);
+    let mut d0 = root_relative(x);
 
     // Primitives and the boundary frames taken from the ground truth (paper §3.4.6).
-    let host: Vec<f32> = d0
+    let mut host: Vec<f32> = d0
         .clone()
         .into_data()
         .convert::<f32>()
         .try_to_vec::<f32>()
         .unwrap();
+    if canonical_heading {
+        let (scale, shift) = model.denoiser.denorm.host();
+        let stats = crate::heading::Stats {
+            scale: &scale,
+            shift: &shift,
+        };
+        crate::heading::canonicalise(&mut host, t, &stats);
+        d0 = Tensor::<3>::from_data(TensorData::new(host.clone(), [b, t, DIMS]), &device);
+    }
     let channels = layout::main_channels();
     let mut prim = Vec::with_capacity(b * t * DIMS);
     let mut mask = Vec::with_capacity(b * t);

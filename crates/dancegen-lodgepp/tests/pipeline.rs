@@ -34,6 +34,11 @@ fn rest_frame() -> Vec<f32> {
 }
 
 fn tiny_model(device: &Device) -> SoloModel {
+    tiny_model_with(device, false)
+}
+
+/// [`tiny_model`], sampling in per-window heading frames when `canonical_heading`.
+fn tiny_model_with(device: &Device, canonical_heading: bool) -> SoloModel {
     let genres = vec!["a".to_string(), "b".to_string()];
     let vqvae = MotionAutoencoderConfig::new(
         ConvCodecConfig::new(MAIN_DIMS, MAIN_DIMS)
@@ -63,6 +68,7 @@ fn tiny_model(device: &Device) -> SoloModel {
         dropout: 0.0,
         foot_refine: true,
         window: WINDOW,
+        canonical_heading,
     };
     pddm.shift.steps = 8;
     pddm.genres = genres.clone();
@@ -118,23 +124,31 @@ fn tiny_model(device: &Device) -> SoloModel {
 fn every_sampler_dances_the_whole_song() {
     let device = inference_device();
     let grad = device.clone().autodiff();
-    let model = tiny_model(&device);
     let frames = 150;
     let music: Vec<f32> = (0..frames * 35)
         .map(|i| ((i % 35) as f32 * 0.1).sin())
         .collect();
     let beats: Vec<usize> = (0..frames).step_by(12).collect();
-    for sampler in [Sampler::Lodgepp, Sampler::Autoregressive, Sampler::Edge] {
+    for (canonical, sampler) in [false, true].into_iter().flat_map(|c| {
+        [Sampler::Lodgepp, Sampler::Autoregressive, Sampler::Edge].map(move |s| (c, s))
+    }) {
+        let model = tiny_model_with(&device, canonical);
         let mut opts = GenerateOptions::defaults(&model, 1, 3);
         opts.sampler = sampler;
         let d = model.generate(&music, &beats, &opts, &device, &grad);
-        assert_eq!(d.n_frames, frames, "{sampler:?}");
+        assert_eq!(
+            d.n_frames, frames,
+            "{sampler:?}, heading frames {canonical}"
+        );
         assert_eq!(d.frames.len(), frames * DIMS);
-        assert!(d.frames.iter().all(|v| v.is_finite()), "{sampler:?}");
+        assert!(
+            d.frames.iter().all(|v| v.is_finite()),
+            "{sampler:?}, heading frames {canonical}"
+        );
         let again = model.generate(&music, &beats, &opts, &device, &grad);
         assert_eq!(
             d.frames, again.frames,
-            "{sampler:?} is deterministic given the seed"
+            "{sampler:?} (heading frames {canonical}) is deterministic given the seed"
         );
         if sampler == Sampler::Lodgepp {
             assert_eq!(d.windows, frames.div_ceil(WINDOW));

@@ -271,6 +271,7 @@ impl TrainTask for PddmTask {
     fn loss(&self, model: &PddmTrainModel, batch: &Batch) -> Losses {
         let l = training::pddm_loss(
             model,
+            self.table.pddm.canonical_heading,
             batch.motion.clone(),
             batch_music(batch),
             &batch_genres(batch),
