@@ -70,8 +70,8 @@ pub struct PddmConfig {
     pub foot_refine: bool,
     /// Frames per window.
     pub window: usize,
-    /// Train and sample every window in its own heading frame (`crate::heading`; our fix for
-    /// data that faces every direction, not in the paper). Off in older bundles.
+    /// Train and sample every window in its own heading frame (`crate::heading`; an experiment,
+    /// not in the paper, measured not to cure the upside-down v3 bodies). Off in older bundles.
     pub canonical_heading: bool,
 }
 

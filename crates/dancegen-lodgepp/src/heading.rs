@@ -3,12 +3,12 @@
 //!
 //! Why: a data set whose takes face every direction (the CMU dance takes turn and whirl, and
 //! mirroring doubles the headings) gives the root orientation's 6D values a near-zero mean and a
-//! ring-shaped distribution. The PDDM trained on it generates roots whose two 6D rows disagree
-//! in heading, which Gram–Schmidt turns into an upside-down body (docs/solo-data-v2.md, third
-//! round). In the window's own heading frame that ring collapses to one mode. This is our fix,
-//! not part of the Lodge++ paper; a model opts in with `canonical_heading = true` in
-//! `[model.pddm]`, and the samplers then turn each window's cues into its frame and the result
-//! back.
+//! ring-shaped distribution; in the window's own heading frame that ring collapses to one mode.
+//! It was built as the suspected cure for the upside-down bodies of the v3 PDDM, and measured
+//! **not** to cure them (docs/solo-data-v2.md, "Fourth round": the PDDM barely learns the root
+//! orientation with or without it). It is an experiment, not part of the Lodge++ paper; a
+//! model opts in with `canonical_heading = true` in `[model.pddm]`, and the samplers then turn
+//! each window's cues into its frame and the result back.
 //!
 //! Frames are normalised EDGE-151 with window-relative root x/y (`crate::layout`); the turn is
 //! done in raw units (`raw = n · scale + shift`, the denormaliser's statistics), since the
@@ -154,7 +154,9 @@ mod tests {
     use super::*;
     use dancegen_motion::rotation::Mat3;
 
-    fn identity_stats() -> (Vec<f32>, Vec<f32>) {
+    /// Different scale and shift per channel (root x/y unshifted, as the denormaliser's), so a turn
+    /// done in normalised units instead of raw ones would fail the tests.
+    fn uneven_stats() -> (Vec<f32>, Vec<f32>) {
         let scale: Vec<f32> = (0..DIMS).map(|c| 0.5 + 0.01 * c as f32).collect();
         let shift: Vec<f32> = (0..DIMS)
             .map(|c| {
@@ -184,7 +186,7 @@ mod tests {
 
     #[test]
     fn turning_by_an_angle_adds_it_to_the_heading_and_rotates_the_path() {
-        let (scale, shift) = identity_stats();
+        let (scale, shift) = uneven_stats();
         let stats = Stats {
             scale: &scale,
             shift: &shift,
@@ -202,7 +204,7 @@ mod tests {
 
     #[test]
     fn canonical_windows_face_plus_x_and_turn_back_exactly() {
-        let (scale, shift) = identity_stats();
+        let (scale, shift) = uneven_stats();
         let stats = Stats {
             scale: &scale,
             shift: &shift,
@@ -229,7 +231,7 @@ mod tests {
 
     #[test]
     fn edge_overwrite_copies_the_previous_half_in_its_own_heading_frame() {
-        let (scale, shift) = identity_stats();
+        let (scale, shift) = uneven_stats();
         let stats = Stats {
             scale: &scale,
             shift: &shift,

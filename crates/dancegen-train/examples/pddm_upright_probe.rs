@@ -45,16 +45,27 @@ fn report(label: &str, x: Tensor<3>, scale: &[f32], shift: &[f32]) {
 }
 
 fn main() {
+    if let Err(e) = probe() {
+        eprintln!("pddm_upright_probe: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn probe() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
-    let run = PathBuf::from(&args[1]);
-    let ck = PathBuf::from(&args[2]);
-    let config = dancegen_train::run_config(&run).unwrap();
-    let task = PddmTask::from_config(&config, &run.join("config.toml")).unwrap();
-    let normalizer = Normalizer::load(&run.join("normalizer.json")).unwrap();
-    let clips = WindowDataset::read_clips(&config.data).unwrap();
-    let data = WindowDataset::new(clips, &config.data, &normalizer, 5).unwrap();
+    let [_, run, ck] = &args[..] else {
+        return Err("usage: pddm_upright_probe RUN_DIR CHECKPOINT.safetensors".into());
+    };
+    let (run, ck) = (PathBuf::from(run), PathBuf::from(ck));
+    let s = |e: &dyn std::fmt::Display| e.to_string();
+    let config = dancegen_train::run_config(&run).map_err(|e| s(&e))?;
+    let task = PddmTask::from_config(&config, &run.join("config.toml"))?;
+    let normalizer = Normalizer::load(&run.join("normalizer.json")).map_err(|e| s(&e))?;
+    let clips = WindowDataset::read_clips(&config.data).map_err(|e| s(&e))?;
+    let data = WindowDataset::new(clips, &config.data, &normalizer, 5).map_err(|e| s(&e))?;
     let dev = device::inference();
-    let model = weights::load(task.init_with_data(&dev, &normalizer), &ck, Layout::Burn).unwrap();
+    let model = weights::load(task.init_with_data(&dev, &normalizer), &ck, Layout::Burn)
+        .map_err(|e| format!("{}: {e}", ck.display()))?;
     let net = &model.denoiser;
     let (scale, shift) = net.denorm.host();
     let (batch, _) = data.batch(
@@ -82,8 +93,8 @@ fn main() {
         );
     }
     report("ground truth", x.clone(), &scale, &shift);
-    let music = batch.music.clone().unwrap();
-    let genre = batch.genre.clone().unwrap();
+    let music = batch.music.clone().ok_or("the run's data has no music")?;
+    let genre = batch.genre.clone().ok_or("the run's data has no genres")?;
     let cond = PddmCond {
         music: music.clone(),
         genre: genre.clone(),
@@ -166,4 +177,5 @@ fn main() {
         let s = sample_windows(net, &shift_s, &cond, None, &opts, &dev, &device::training());
         report(&format!("sampled, guidance {g}"), s, &scale, &shift);
     }
+    Ok(())
 }
