@@ -6,19 +6,9 @@
 //! after another. In normalised units that is `(x − x_first) / std`, i.e. the normaliser's mean
 //! is not added back for those two channels ([`ROOT_HORIZONTAL`]).
 
-use std::ops::Range;
-
-use dancegen_motion::repr::Edge151;
-
-/// Values per frame.
-pub const DIMS: usize = Edge151::DIMS;
-/// Contact labels (left ankle, right ankle, left toe, right toe).
-pub const CONTACTS: Range<usize> = Edge151::CONTACTS;
-/// Z-up root x, y (horizontal); z is the height.
-pub const ROOT_HORIZONTAL: [usize; 2] = [4, 5];
-pub const ROOT_HEIGHT: usize = 6;
-/// First 6D channel.
-pub const ROT6D_START: usize = 7;
+pub use dancegen_nn::edge151::{
+    CONTACTS, DIMS, FEET, ROOT_HEIGHT, ROOT_HORIZONTAL, ROT6D_START, rot6d,
+};
 
 /// The VQ-VAE's "main joints" (paper §3.3.1: root, left/right shoulder, left/right arm,
 /// left/right leg), as SMPL 24 indices: pelvis 0, shoulders 16/17, elbows 18/19, hips 1/2. The
@@ -31,15 +21,6 @@ pub const MAIN_DIMS: usize = MAIN_JOINTS.len() * 6;
 /// shoulders, elbows; the coarse dance has no knees, so: hips, shoulders, elbows). Positions in
 /// [`MAIN_JOINTS`].
 pub const RETRIEVAL_MAIN: [usize; 6] = [1, 2, 3, 4, 5, 6];
-
-/// SMPL joints of the feet the refine block and the contact loss use (ankles 7/8, toes 10/11,
-/// the order of the contact labels).
-pub const FEET: [usize; 4] = [7, 8, 10, 11];
-
-/// Channel of the 6D value `k` of joint `j`.
-pub fn rot6d(j: usize, k: usize) -> usize {
-    ROT6D_START + 6 * j + k
-}
 
 /// The 42 coarse-dance channels, in [`MAIN_JOINTS`] order.
 pub fn main_channels() -> Vec<usize> {

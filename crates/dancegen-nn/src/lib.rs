@@ -20,6 +20,7 @@ pub mod autoencoder;
 pub mod conv;
 pub mod device;
 pub mod diffusion;
+pub mod edge151;
 pub mod film;
 pub mod gpt;
 pub mod host_attention;

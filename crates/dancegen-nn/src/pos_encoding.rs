@@ -12,8 +12,9 @@
 //!   paper writes the `k = 1` pair (`sin(π(i mod T)/T) ⊕ cos(π(i mod T)/T)`); higher `k` extend
 //!   it to `d` channels (our choice, the code is unreleased).
 //! - [`LearnedPositions`]: a learned table (GPT block positions).
-//! - [`DancerIdentity`]: TCDiff++'s dancer positioning embedding: a sinusoidal code of each
-//!   dancer's slot (out of `max_dancers`) added to the temporal encoding of its frames.
+//! - [`dancer_positions`]: TCDiff++'s dancer positioning embedding for frame-major group
+//!   tokens: a sinusoidal code of each dancer's rank (out of `max_dancers`) added to the
+//!   temporal encoding of its frame.
 
 use burn::config::Config;
 use burn::module::{Module, Param};
@@ -167,28 +168,35 @@ impl LearnedPositions {
     }
 }
 
-/// TCDiff++ dancer positioning embedding: per dancer slot, a sinusoidal identity code
-/// (`sinusoidal` row of the slot index, scaled by `identity_scale`) added to the sinusoidal
-/// temporal code of each frame. Output `[dancers · frames, d]`, dancer-major (dancer 0's frames
-/// first), matching the sequence layout TCDiff++ uses.
+/// Dancer positioning embedding (TCDiff++ paper §4.1, Eq. 8) for **frame-major** group tokens
+/// (token `k` = frame `k / N`, dancer slot `k % N`, the layout of TCDiff++'s `p_losses`,
+/// `../shared/reference/group.md` "Corrections"): row `k` is the sinusoidal code of frame
+/// `k / N` plus the sinusoidal code of slot `k % N`'s rank `ranks[k % N]`, a fixed row of a
+/// `max_dancers`-row table. Output `[frames · N, d]`.
+///
+/// Deterministic, unlike the released `Tem_ID_Encoder`, which re-draws the identities on every
+/// forward and indexes them as if the tokens were dancer-major (group.md §5 P1).
 pub fn dancer_positions(
-    slots: &[usize],
+    ranks: &[usize],
     frames: usize,
     d: usize,
     max_dancers: usize,
     device: &Device,
 ) -> Tensor<2> {
     assert!(
-        slots.iter().all(|&s| s < max_dancers),
-        "dancer slot out of range"
+        ranks.iter().all(|&s| s < max_dancers),
+        "dancer rank out of range"
     );
+    let n = ranks.len();
     let time = sinusoidal(0, frames, d, device);
     let ids = sinusoidal(0, max_dancers, d, device);
-    let rows: Vec<Tensor<2>> = slots
-        .iter()
-        .map(|&s| time.clone() + ids.clone().narrow(0, s, 1))
-        .collect();
-    Tensor::cat(rows, 0)
+    let idx: Vec<i64> = ranks.iter().map(|&r| r as i64).collect();
+    let id_rows = ids.select(
+        0,
+        Tensor::<1, burn::tensor::Int>::from_data(TensorData::new(idx, [n]), device),
+    );
+    let time = time.unsqueeze_dim::<3>(1).expand([frames, n, d]);
+    (time + id_rows.unsqueeze::<3>().expand([frames, n, d])).reshape([frames * n, d])
 }
 
 #[cfg(test)]
@@ -217,7 +225,7 @@ mod tests {
     }
 
     #[test]
-    fn dancer_positions_share_time_and_differ_by_identity() {
+    fn dancer_positions_are_frame_major() {
         let dev = crate::device::inference();
         let t = dancer_positions(&[3, 0], 5, 8, 5, &dev);
         assert_eq!(t.dims(), [10, 8]);
@@ -226,8 +234,9 @@ mod tests {
         let ids = rows(sinusoidal(0, 5, 8, &dev));
         for f in 0..5 {
             for c in 0..8 {
-                assert!((r[f][c] - (time[f][c] + ids[3][c])).abs() < 1e-6);
-                assert!((r[5 + f][c] - (time[f][c] + ids[0][c])).abs() < 1e-6);
+                // Token 2f is (frame f, slot 0 of rank 3), token 2f + 1 is (frame f, slot 1).
+                assert!((r[2 * f][c] - (time[f][c] + ids[3][c])).abs() < 1e-6);
+                assert!((r[2 * f + 1][c] - (time[f][c] + ids[0][c])).abs() < 1e-6);
             }
         }
     }

@@ -383,6 +383,24 @@ pub fn sample_hooked<M: Denoiser>(
     device: &Device,
     hook: &dyn StepHook,
 ) -> Result<Tensor<3>, Cancelled> {
+    sample_with(model, schedule, shape, cond, opts, device, hook, &|x| x)
+}
+
+/// [`sample_hooked`] with a system's own constraint `between_steps`, applied to `x_t` after
+/// every step but the last (after EDGE's long-form overwrite, before the cues): a window
+/// overwrite that re-bases window-relative roots (TCDiff++'s groups, whose windows store roots
+/// relative to their own frame-0 centroid), for instance.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_with<M: Denoiser>(
+    model: &M,
+    schedule: &Schedule,
+    shape: [usize; 3],
+    cond: Option<&M::Cond>,
+    opts: &SampleOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+    between_steps: &dyn Fn(Tensor<3>) -> Tensor<3>,
+) -> Result<Tensor<3>, Cancelled> {
     let big_t = schedule.timesteps();
     let pairs: Vec<(usize, i64)> = match opts.method {
         Method::Ddpm => (0..big_t).rev().map(|t| (t, t as i64 - 1)).collect(),
@@ -423,6 +441,9 @@ pub fn sample_hooked<M: Denoiser>(
         };
         if opts.long_form && t_next >= 0 {
             x = overwrite_first_halves(x);
+        }
+        if t_next >= 0 {
+            x = between_steps(x);
         }
         let remaining = n - i;
         for cue in &opts.cues {
