@@ -14,6 +14,7 @@ pub mod couple_separation;
 pub mod fk;
 pub mod foot_ik;
 pub mod foot_lock;
+pub mod formation;
 pub mod formats;
 pub mod gltf;
 pub mod pickle;
