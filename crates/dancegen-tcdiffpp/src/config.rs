@@ -1,0 +1,190 @@
+//! The model configuration (`[model]` of a training config, `model.toml` of a bundle).
+//!
+//! Paper values (TCDiff++ §5.1) are d = 512, M = 8 layers, 8 heads, a 3-layer ReLU fusion MLP,
+//! W = 3 ConcatSquashLinear layers and the loss weights below. AIOZ-GDance has 16.7 h of group
+//! motion; we have about 8 minutes of distinct real motion, so the defaults follow group.md §4
+//! "Model size" (d = 128–192, 4 layers, 4 heads, N_max = 5 with masks, 150 frames, DDIM 20).
+//! Every ablation of the paper's Table 4 is a switch here.
+
+use serde::{Deserialize, Serialize};
+
+/// Which mixer follows the self-attention in each Sequence Decoder layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SequenceMixer {
+    /// EDGE's cross-attention to the memory (the released code's default, `--use_ssm False`).
+    CrossAttention,
+    /// The released `CrossMamba`: Mamba v1 plus a linear cross-attention to the memory (paper
+    /// §4.1 "Sequence Decoder", group.md §1 row 4).
+    Mamba,
+}
+
+/// The network.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DenoiserConfig {
+    pub d_model: usize,
+    pub n_layers: usize,
+    pub n_heads: usize,
+    pub d_ff: usize,
+    /// Transformer encoder layers over the music tokens (EDGE's condition encoder: 2).
+    pub music_layers: usize,
+    pub dropout: f64,
+    pub mixer: SequenceMixer,
+    /// Fusion Projection (paper §4.1); `false` is Table 4's "w/o FP".
+    pub fusion_projection: bool,
+    /// Hidden width of the fusion MLP; the released code uses `2 · d_model` (1024 for 512).
+    pub fusion_hidden: Option<usize>,
+    /// Dancer positioning embedding (rank code per slot); `false` keeps only the temporal
+    /// code of each frame ("w/o DPE").
+    pub positioning: bool,
+    /// Swap mode S as FiLM input and memory token ("w/o SM").
+    pub swap_mode: bool,
+    /// Footwork Adaptor ("w/o FA").
+    pub footwork: bool,
+    /// Hidden width of the footwork adaptor (released: 128).
+    pub footwork_hidden: usize,
+}
+
+impl Default for DenoiserConfig {
+    fn default() -> Self {
+        Self {
+            d_model: 128,
+            n_layers: 4,
+            n_heads: 4,
+            d_ff: 512,
+            music_layers: 2,
+            dropout: 0.1,
+            mixer: SequenceMixer::CrossAttention,
+            fusion_projection: true,
+            fusion_hidden: None,
+            positioning: true,
+            swap_mode: true,
+            footwork: true,
+            footwork_hidden: 128,
+        }
+    }
+}
+
+impl DenoiserConfig {
+    pub fn fusion_hidden(&self) -> usize {
+        self.fusion_hidden.unwrap_or(2 * self.d_model)
+    }
+}
+
+/// Loss weights (paper §5.1: λ_sim = λ_D = 0.636, λ_vel = 2.964, λ_FK = 0.646,
+/// λ_con = 10.942; the first four are EDGE's).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LossWeights {
+    pub simple: f64,
+    pub velocity: f64,
+    pub fk: f64,
+    pub contact: f64,
+    /// Distance-consistency loss (Eq. 16–17); 0 is Table 4's "w/o L_D".
+    pub distance: f64,
+}
+
+impl Default for LossWeights {
+    fn default() -> Self {
+        Self {
+            simple: 0.636,
+            velocity: 2.964,
+            fk: 0.646,
+            contact: 10.942,
+            distance: 0.636,
+        }
+    }
+}
+
+/// Training-time randomisation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainingConfig {
+    /// Classifier-free music dropout (EDGE / TCDiff++: 0.25).
+    pub cond_drop: f64,
+    /// Share of windows trained without any clean root injection (issue #17: half), so one
+    /// model makes free and controlled dances.
+    pub control_drop: f64,
+}
+
+impl Default for TrainingConfig {
+    fn default() -> Self {
+        Self {
+            cond_drop: 0.25,
+            control_drop: 0.5,
+        }
+    }
+}
+
+/// How LGDS gives the previous window's tail to the next window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PrefixMode {
+    /// Released `lgds_ddim_sample`: the clean prefix after every step.
+    Clean,
+    /// EDGE's inpainting: the prefix noised to the step's level.
+    Renoised,
+}
+
+/// Long-form sampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LongSampler {
+    /// Paper §4.4, sequential windows (window 0 kept, unlike the released code).
+    Lgds,
+    /// All windows at once, EDGE's first-half overwrite and final stitching.
+    Parallel,
+}
+
+/// Sampling defaults (a request may override steps, guidance and the sampler).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SamplingConfig {
+    /// DDIM steps (released: 50; group.md §4: 20 on CPU).
+    pub steps: usize,
+    /// DDIM eta (released: 1).
+    pub eta: f64,
+    /// Guidance weight (EDGE / TCDiff++: 2).
+    pub guidance: f64,
+    pub sampler: LongSampler,
+    pub prefix: PrefixMode,
+}
+
+impl Default for SamplingConfig {
+    fn default() -> Self {
+        Self {
+            steps: 20,
+            eta: 1.0,
+            guidance: 2.0,
+            sampler: LongSampler::Lgds,
+            prefix: PrefixMode::Clean,
+        }
+    }
+}
+
+/// `[model]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GroupModelConfig {
+    /// Frames per window (released: 150 at 30 fps).
+    pub window: Option<usize>,
+    pub denoiser: DenoiserConfig,
+    pub loss: LossWeights,
+    pub training: TrainingConfig,
+    pub sampling: SamplingConfig,
+}
+
+/// Released window length: 5 s at 30 fps (`TCDiff:data/data_preprocess/slice.py`).
+pub const WINDOW_FRAMES: usize = 150;
+
+impl GroupModelConfig {
+    pub fn window(&self) -> usize {
+        self.window.unwrap_or(WINDOW_FRAMES)
+    }
+
+    /// Parses a `[model]` table (or a whole `model.toml`).
+    pub fn from_toml(text: &str) -> Result<Self, toml::de::Error> {
+        toml::from_str(text)
+    }
+}

@@ -1,0 +1,236 @@
+//! The training objective (paper §4.3, Eq. 12–18) with formation-control injection.
+//!
+//! `L = λ_sim L_simple + λ_vel L_vel + λ_FK L_FK + λ_con L_con + λ_D L_D`, all over the active
+//! slots only:
+//! - `L_simple`: x̂0 against x0 (L2, EDGE `p_losses`);
+//! - `L_vel`: frame differences of x̂0 against x0's (EDGE: every channel; the released
+//!   TCDiff++ keeps only the rotations, group.md §1 row 8);
+//! - `L_FK`: world joints of both (EDGE FK on the absolute root, as TCDiff++ does);
+//! - `L_con`: foot-joint velocity where the network's own contact label is above 0.95 (EDGE
+//!   `foot_loss`);
+//! - `L_D`, Eq. 16–17: for every pair of dancers, the change of their relative root position
+//!   `(p_i − p_j) − (p̂_i − p̂_j)`, squared, summed over pairs, divided by `C − 1`, averaged
+//!   over frames. The released `dis_loss` (×100) is a per-dancer temporal Δroot error instead,
+//!   not pairwise (group.md §1 row 8); we implement the paper's.
+//!
+//! Formation control (issue #17, group.md §1 row 12 "Proposal"): with probability
+//! `1 − control_drop` a window trains controlled — each active dancer, with probability
+//! [`CONTROL_DANCER_PROB`], has its clean root x/y written into `x_t` (and the control flag
+//! set) on the whole window or, half of the time, on one random span of at least half of it;
+//! otherwise nothing is injected. One model thus learns free dances, fully controlled ones and
+//! partly controlled ones (dancers or times left free in a FORMATION.json).
+
+use dancegen_nn::burn;
+use dancegen_nn::diffusion::Schedule;
+use dancegen_nn::diffusion::noise::SeededNoise;
+use dancegen_nn::edge151::{CONTACTS, DIMS, FEET, ROOT_HORIZONTAL, displacement, joints};
+use dancegen_nn::loss::FkSkeleton;
+
+use burn::tensor::{Device, Tensor, TensorData};
+
+use crate::config::{LossWeights, TrainingConfig};
+use crate::denoiser::{GroupCond, GroupDenoiser};
+use crate::layout::{GROUP_DIMS, N_MAX, channel, from_tokens, to_tokens};
+
+/// EDGE's contact threshold on the predicted label (`foot_loss`: `model_contact > 0.95`).
+pub const CONTACT_THRESHOLD: f64 = 0.95;
+/// Share of the active dancers of a controlled window whose root path is given (our choice).
+pub const CONTROL_DANCER_PROB: f64 = 0.8;
+
+/// One batch of group windows.
+#[derive(Clone, Debug)]
+pub struct GroupBatch {
+    /// Normalised windows `[B, T, N_MAX·151]` (slots sorted, roots centroid-relative, empty
+    /// slots zero).
+    pub x0: Tensor<3>,
+    /// `[B, T, 35]`.
+    pub music: Tensor<3>,
+    pub dancers: Vec<usize>,
+    /// Swap codes `[B, N_MAX²]`.
+    pub swap: Tensor<2>,
+}
+
+/// Named loss terms; `total` is the weighted sum.
+pub struct GroupLosses {
+    pub total: Tensor<1>,
+    pub parts: Vec<(&'static str, Tensor<1>)>,
+}
+
+/// 1 on the channels of active slots, `[B, 1, N_MAX·151]`.
+pub fn channel_mask(dancers: &[usize], device: &Device) -> Tensor<3> {
+    let b = dancers.len();
+    let mut m = Vec::with_capacity(b * GROUP_DIMS);
+    for &n in dancers {
+        m.extend((0..GROUP_DIMS).map(|c| f32::from(u8::from(c / DIMS < n))));
+    }
+    Tensor::from_data(TensorData::new(m, [b, 1, GROUP_DIMS]), device)
+}
+
+/// Which (frame, slot) roots a training window gets clean: `[B·T·N_MAX]` flags.
+fn draw_control(dancers: &[usize], t: usize, drop: f64, rng: &mut SeededNoise) -> Vec<f32> {
+    let mut c = vec![0f32; dancers.len() * t * N_MAX];
+    for (b, &n) in dancers.iter().enumerate() {
+        if rng.uniform() < drop {
+            continue;
+        }
+        for s in 0..n {
+            if rng.uniform() >= CONTROL_DANCER_PROB {
+                continue;
+            }
+            let span = if rng.uniform() < 0.5 || t < 2 {
+                0..t
+            } else {
+                let len = t.div_ceil(2) + rng.below(t / 2 + 1).min(t - t.div_ceil(2));
+                let start = rng.below(t - len + 1);
+                start..start + len
+            };
+            for f in span {
+                c[(b * t + f) * N_MAX + s] = 1.0;
+            }
+        }
+    }
+    c
+}
+
+/// The control flags as `[B, T, N_MAX]` and as a channel mask over the root x/y of
+/// `[B, T, N_MAX·151]`.
+pub fn control_tensors(
+    flags: &[f32],
+    b: usize,
+    t: usize,
+    device: &Device,
+) -> (Tensor<3>, Tensor<3>) {
+    let mut cm = vec![0f32; b * t * GROUP_DIMS];
+    for (i, &f) in flags.iter().enumerate() {
+        if f > 0.0 {
+            let (bt, s) = (i / N_MAX, i % N_MAX);
+            for &ch in &ROOT_HORIZONTAL {
+                cm[bt * GROUP_DIMS + channel(s, ch)] = 1.0;
+            }
+        }
+    }
+    (
+        Tensor::from_data(TensorData::new(flags.to_vec(), [b, t, N_MAX]), device),
+        Tensor::from_data(TensorData::new(cm, [b, t, GROUP_DIMS]), device),
+    )
+}
+
+/// One training batch; `seed` draws timesteps, noise, music dropout and control.
+pub fn group_loss(
+    net: &GroupDenoiser,
+    schedule: &Schedule,
+    batch: &GroupBatch,
+    weights: &LossWeights,
+    training: &TrainingConfig,
+    seed: u64,
+) -> GroupLosses {
+    let [b, t, _] = batch.x0.dims();
+    let device = batch.x0.device();
+    let mut rng = SeededNoise::new(seed);
+    let chmask = channel_mask(&batch.dancers, &device);
+    let x0 = batch.x0.clone() * chmask.clone();
+
+    let flags = draw_control(&batch.dancers, t, training.control_drop, &mut rng);
+    let (control, cmask) = control_tensors(&flags, b, t, &device);
+    let steps: Vec<usize> = (0..b).map(|_| rng.below(schedule.timesteps())).collect();
+    let keep: Vec<bool> = (0..b)
+        .map(|_| rng.uniform() >= training.cond_drop)
+        .collect();
+    let noise = rng.tensor([b, t, GROUP_DIMS], &device);
+    let x_t = schedule.q_sample(x0.clone(), &steps, noise) * chmask.clone();
+    let x_t = x0.clone() * cmask.clone() + x_t * (cmask.neg() + 1.0);
+    let cond = GroupCond {
+        music: batch.music.clone(),
+        dancers: batch.dancers.clone(),
+        swap: batch.swap.clone(),
+        control,
+    };
+    let tf: Vec<f32> = steps.iter().map(|&s| s as f32).collect();
+    let pred = net.forward(x_t, &tf, &cond, &keep) * chmask.clone();
+
+    // Normalisers of the masked means: active values per frame.
+    let active: usize = batch.dancers.iter().sum();
+    let per_frame = (active * DIMS) as f64;
+    let simple = (pred.clone() - x0.clone()).powf_scalar(2.0).sum() / (per_frame * t as f64);
+    let vel = |x: Tensor<3>| x.clone().narrow(1, 1, t - 1) - x.narrow(1, 0, t - 1);
+    let velocity =
+        (vel(pred.clone()) - vel(x0.clone())).powf_scalar(2.0).sum() / (per_frame * (t - 1) as f64);
+
+    let skel = FkSkeleton::smpl24();
+    let raw_pred = net.denorm.apply(to_tokens(pred.clone()));
+    let raw_gt = net.denorm.apply(to_tokens(x0.clone()));
+    let jp = joints(raw_pred.clone(), &skel); // [B, T·N, 24, 3]
+    let jg = joints(raw_gt.clone(), &skel);
+    let tok_mask = crate::layout::token_mask(&batch.dancers, t, &device).unsqueeze_dim::<4>(3);
+    let joint_count = (active * t * 24 * 3) as f64;
+    let fk = ((jp.clone() - jg) * tok_mask.clone())
+        .powf_scalar(2.0)
+        .sum()
+        / joint_count;
+
+    // Foot velocity where the network predicts contact (per dancer, along frames).
+    let per_dancer = |j: Tensor<4>| j.reshape([b, t, N_MAX * 24, 3]);
+    let foot_v = displacement(per_dancer(jp)).reshape([b, t * N_MAX, 24, 3]);
+    let feet = Tensor::cat(
+        FEET.iter()
+            .map(|&f| foot_v.clone().narrow(2, f, 1))
+            .collect(),
+        2,
+    ); // [B, T·N, 4, 3]
+    let static_feet = raw_pred
+        .clone()
+        .narrow(2, CONTACTS.start, CONTACTS.len())
+        .detach()
+        .greater_elem(CONTACT_THRESHOLD)
+        .float()
+        .unsqueeze_dim::<4>(3);
+    let contact =
+        (feet * static_feet * tok_mask).powf_scalar(2.0).sum() / (active * t * 4 * 3) as f64;
+
+    let distance = distance_consistency(from_tokens(raw_pred), from_tokens(raw_gt), &batch.dancers);
+
+    let total = simple.clone() * weights.simple
+        + velocity.clone() * weights.velocity
+        + fk.clone() * weights.fk
+        + contact.clone() * weights.contact
+        + distance.clone() * weights.distance;
+    GroupLosses {
+        total,
+        parts: vec![
+            ("simple", simple),
+            ("velocity", velocity),
+            ("fk", fk),
+            ("contact", contact),
+            ("distance", distance),
+        ],
+    }
+}
+
+/// Eq. 16–17 on raw windows `[B, T, N_MAX·151]` (roots in metres): per element, the sum over
+/// active pairs `i < j` of `‖(p_i − p_j) − (p̂_i − p̂_j)‖²` divided by `C − 1`, averaged over
+/// frames and elements.
+pub fn distance_consistency(pred: Tensor<3>, gt: Tensor<3>, dancers: &[usize]) -> Tensor<1> {
+    let [b, t, _] = pred.dims();
+    let device = pred.device();
+    let root = |x: &Tensor<3>, s: usize| x.clone().narrow(2, channel(s, ROOT_HORIZONTAL[0]), 2);
+    let mut total: Option<Tensor<1>> = None;
+    for i in 0..N_MAX {
+        for j in i + 1..N_MAX {
+            let w: Vec<f32> = dancers
+                .iter()
+                .map(|&n| if j < n { 1.0 / (n - 1) as f32 } else { 0.0 })
+                .collect();
+            if w.iter().all(|&v| v == 0.0) {
+                continue;
+            }
+            let w = Tensor::<1>::from_data(TensorData::new(w, [b]), &device).reshape([b, 1, 1]);
+            let d = (root(&gt, i) - root(&gt, j)) - (root(&pred, i) - root(&pred, j));
+            let term = (d.powf_scalar(2.0) * w).sum() / (b * t) as f64;
+            total = Some(match total {
+                Some(acc) => acc + term,
+                None => term,
+            });
+        }
+    }
+    total.unwrap_or_else(|| Tensor::zeros([1], &device))
+}

@@ -1,0 +1,516 @@
+//! Long group dances: windows of `W` frames at a stride of `W / 2`, two ways (issue #17 asks
+//! for both, measured against each other in `docs/group-eval.md`).
+//!
+//! - [`LongSampler::Lgds`] (paper §4.4, Eq. 19): windows one after another. Window `w > 0`
+//!   starts from the previous window's second half noised to the first step (Eq. 19's
+//!   `x̂_T^[75:150]`) followed by fresh noise, and that half is imposed on its first `W / 2`
+//!   frames after every step: clean, as the released `lgds_ddim_sample` does, or re-noised to
+//!   the step's level (EDGE inpainting), [`PrefixMode`]. Unlike the released code, window 0 is
+//!   kept (group.md §5 P4), so the dance starts with the song.
+//! - [`LongSampler::Parallel`]: every window in one batch; after every step each window's first
+//!   half is overwritten by the previous window's second half (EDGE `long_ddim_sample`), then
+//!   EDGE's stitching cross-fades positions and slerps rotations over the overlaps.
+//!
+//! Window coordinates: the network works with roots relative to the group's frame-0 centroid
+//! and slots sorted left to right at frame 0 ([`crate::layout`]). LGDS re-sorts the slots at
+//! every window (by the prefix's first frame) and re-bases the prefix, so every window looks
+//! like a training window, then maps the result back to the dance's own dancer order and
+//! stage position. The parallel sampler cannot re-sort (all windows move at once), so its
+//! slots keep the dance's frame-0 order throughout.
+//!
+//! Formation control: requested root paths (raw Z-up metres, per frame and dancer, `None` =
+//! free) become, in window coordinates, a clean cue on those root channels plus the control
+//! flags the network was trained with. The swap code of a window is the permutation from the
+//! requested order at its first frame to the one at its last when every dancer is given at
+//! both; otherwise the identity (keep the order).
+
+use dancegen_nn::burn;
+use dancegen_nn::diffusion::longform::{ChannelLayout, stitch};
+use dancegen_nn::diffusion::noise::SeededNoise;
+use dancegen_nn::diffusion::{
+    Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, WeightSchedule, sample_with,
+};
+use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, ROT6D_START};
+use dancegen_nn::progress::{Cancelled, StepHook};
+
+use burn::tensor::{Device, Tensor, TensorData};
+
+use crate::config::{LongSampler, PrefixMode};
+use crate::denoiser::{GroupCond, GroupDenoiser, MUSIC_DIMS, PreparedGroupDenoiser};
+use crate::layout::{GROUP_DIMS, N_MAX, centroid, channel, shift_roots};
+use crate::swap::{identity_code, swap_code};
+
+/// A requested root position: raw Z-up `(x, y)` metres.
+pub type RootXy = [f32; 2];
+
+/// One long group dance to sample.
+pub struct GroupRequest<'a> {
+    /// EDGE-35 features `[frames, 35]`, flat.
+    pub music: &'a [f32],
+    pub frames: usize,
+    pub dancers: usize,
+    /// Requested root paths, `control[f · N_MAX + s]`.
+    pub control: Option<&'a [Option<RootXy>]>,
+}
+
+/// Sampling choices.
+#[derive(Clone, Debug)]
+pub struct GroupSampleOptions {
+    pub steps: usize,
+    pub eta: f64,
+    pub guidance: f64,
+    pub sampler: LongSampler,
+    pub prefix: PrefixMode,
+    pub seed: u64,
+}
+
+/// Number of windows of `window` frames at stride `window / 2` that cover `frames`.
+pub fn window_count(frames: usize, window: usize) -> usize {
+    let half = window / 2;
+    if frames <= window {
+        1
+    } else {
+        1 + (frames - window).div_ceil(half)
+    }
+}
+
+/// The model's per-channel `(scale, shift)`, repeated for every slot.
+fn group_stats(net: &GroupDenoiser) -> (Vec<f32>, Vec<f32>) {
+    let (scale, shift) = net.denorm.host();
+    (scale.repeat(N_MAX), shift.repeat(N_MAX))
+}
+
+fn music_window(music: &[f32], frames: usize, start: usize, window: usize) -> Vec<f32> {
+    (start..start + window)
+        .flat_map(|f| {
+            let f = f.min(frames.saturating_sub(1));
+            music[f * MUSIC_DIMS..(f + 1) * MUSIC_DIMS].iter().copied()
+        })
+        .collect()
+}
+
+/// Generates a whole dance: raw frames `[frames, N_MAX·151]` (flat; Z-up, metres, roots on
+/// the stage; slots `n..` zero). Deterministic given `opts.seed`.
+pub fn generate(
+    net: &GroupDenoiser,
+    schedule: &Schedule,
+    window: usize,
+    req: &GroupRequest,
+    opts: &GroupSampleOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Vec<f32>, Cancelled> {
+    assert!((2..=N_MAX).contains(&req.dancers), "2..={N_MAX} dancers");
+    assert!(window.is_multiple_of(2) && window >= 2, "even window");
+    let mut out = match opts.sampler {
+        LongSampler::Lgds => lgds(net, schedule, window, req, opts, device, hook)?,
+        LongSampler::Parallel => parallel(net, schedule, window, req, opts, device, hook)?,
+    };
+    out.truncate(req.frames * GROUP_DIMS);
+    Ok(out)
+}
+
+fn sample_options(
+    opts: &GroupSampleOptions,
+    seed: u64,
+    cues: Vec<Cue>,
+    init: Option<Tensor<3>>,
+) -> SampleOptions {
+    SampleOptions {
+        method: Method::Ddim {
+            steps: opts.steps,
+            eta: opts.eta,
+        },
+        // Mean/std-normalised data is not confined to [−1, 1] (EDGE's min-max range).
+        clip_x0: None,
+        guidance: if (opts.guidance - 1.0).abs() < 1e-9 {
+            Guidance::Conditional
+        } else {
+            Guidance::Scale(opts.guidance)
+        },
+        weight_schedule: WeightSchedule::Constant,
+        cues,
+        long_form: false,
+        seed,
+        init,
+    }
+}
+
+/// The requested roots of frames `start..start + window` in window coordinates
+/// (normalised, minus `origin`), slots permuted by `perm` (`perm[slot] = dancer`).
+struct WindowControl {
+    /// `[W, N_MAX]` flags.
+    flags: Vec<f32>,
+    /// `[W, N_MAX·151]` values (root channels only) and mask.
+    values: Vec<f32>,
+    mask: Vec<f32>,
+    swap: Vec<f32>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn window_control(
+    req: &GroupRequest,
+    start: usize,
+    window: usize,
+    perm: &[usize],
+    origin: [f32; 2],
+    scale: &[f32],
+) -> WindowControl {
+    let n = req.dancers;
+    let mut flags = vec![0f32; window * N_MAX];
+    let mut values = vec![0f32; window * GROUP_DIMS];
+    let mut mask = vec![0f32; window * GROUP_DIMS];
+    let at = |f: usize, d: usize| -> Option<RootXy> {
+        let c = req.control?;
+        if f >= req.frames {
+            return None;
+        }
+        c[f * N_MAX + d]
+    };
+    for w in 0..window {
+        for (s, &d) in perm.iter().enumerate() {
+            if let Some(p) = at(start + w, d) {
+                flags[w * N_MAX + s] = 1.0;
+                for (k, &ch) in ROOT_HORIZONTAL.iter().enumerate() {
+                    let i = w * GROUP_DIMS + channel(s, ch);
+                    values[i] = p[k] / scale[ch] - origin[k];
+                    mask[i] = 1.0;
+                }
+            }
+        }
+    }
+    let last = (start + window).min(req.frames) - 1;
+    let first: Option<Vec<RootXy>> = perm.iter().map(|&d| at(start, d)).collect();
+    let end: Option<Vec<RootXy>> = perm.iter().map(|&d| at(last, d)).collect();
+    let swap = match (first, end) {
+        (Some(_), Some(end)) => swap_code(&end.iter().map(|p| p[0]).collect::<Vec<_>>()),
+        _ => identity_code(n),
+    };
+    WindowControl {
+        flags,
+        values,
+        mask,
+        swap,
+    }
+}
+
+/// Slot order sorting the first `n` slots of one group frame left to right (stage x).
+fn sorted_slots(frame: &[f32], n: usize) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&a, &b| {
+        frame[channel(a, ROOT_HORIZONTAL[0])]
+            .total_cmp(&frame[channel(b, ROOT_HORIZONTAL[0])])
+            .then(a.cmp(&b))
+    });
+    idx
+}
+
+/// `frames` `[T, N_MAX·151]` with slot `s` taken from dancer `perm[s]` (`inverse = false`) or
+/// dancer `perm[s]` taken from slot `s` (`inverse = true`).
+fn permute(frames: &[f32], perm: &[usize], inverse: bool) -> Vec<f32> {
+    let mut out = frames.to_vec();
+    for (src, dst) in frames
+        .chunks_exact(GROUP_DIMS)
+        .zip(out.chunks_exact_mut(GROUP_DIMS))
+    {
+        for (s, &d) in perm.iter().enumerate() {
+            let (from, to) = if inverse { (s, d) } else { (d, s) };
+            dst[to * DIMS..(to + 1) * DIMS].copy_from_slice(&src[from * DIMS..(from + 1) * DIMS]);
+        }
+    }
+    out
+}
+
+fn to_tensor(v: Vec<f32>, shape: [usize; 3], device: &Device) -> Tensor<3> {
+    Tensor::from_data(TensorData::new(v, shape), device)
+}
+
+fn host(x: Tensor<3>) -> Vec<f32> {
+    x.into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .expect("f32 tensor")
+}
+
+/// Where window 0's frame-0 centroid sits (normalised): the requested centroid when every
+/// dancer is given at frame 0, else the stage centre.
+fn first_origin(req: &GroupRequest, scale: &[f32]) -> [f32; 2] {
+    let given: Option<Vec<RootXy>> = req
+        .control
+        .and_then(|c| (0..req.dancers).map(|d| c[d]).collect());
+    match given {
+        Some(p) => {
+            let n = p.len() as f32;
+            let mut c = [0f32; 2];
+            for q in &p {
+                c[0] += q[0] / n;
+                c[1] += q[1] / n;
+            }
+            [
+                c[0] / scale[ROOT_HORIZONTAL[0]],
+                c[1] / scale[ROOT_HORIZONTAL[1]],
+            ]
+        }
+        None => [0.0, 0.0],
+    }
+}
+
+fn lgds(
+    net: &GroupDenoiser,
+    schedule: &Schedule,
+    window: usize,
+    req: &GroupRequest,
+    opts: &GroupSampleOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Vec<f32>, Cancelled> {
+    let n = req.dancers;
+    let half = window / 2;
+    let windows = window_count(req.frames, window);
+    let (scale, shift) = group_stats(net);
+    let mut rng = SeededNoise::new(opts.seed);
+    // Normalised frames with global (stage) roots, in the dance's own dancer order.
+    let mut out: Vec<f32> = Vec::with_capacity((window + (windows - 1) * half) * GROUP_DIMS);
+    let identity: Vec<usize> = (0..n).collect();
+    for w in 0..windows {
+        let start = w * half;
+        let (perm, origin, prefix) = if w == 0 {
+            (identity.clone(), first_origin(req, &scale), None)
+        } else {
+            let placed = out.len() / GROUP_DIMS;
+            let tail = &out[(placed - half) * GROUP_DIMS..];
+            let perm = sorted_slots(&tail[..GROUP_DIMS], n);
+            let origin = centroid(&tail[..GROUP_DIMS], n);
+            let mut p = permute(tail, &perm, false);
+            shift_roots(&mut p, n, [-origin[0], -origin[1]]);
+            (perm, origin, Some(p))
+        };
+        let ctrl = window_control(req, start, window, &perm, origin, &scale);
+        let music = music_window(req.music, req.frames, start, window);
+        let cond = GroupCond {
+            music: to_tensor(music, [1, window, MUSIC_DIMS], device),
+            dancers: vec![n],
+            swap: Tensor::from_data(
+                TensorData::new(ctrl.swap.clone(), [1, ctrl.swap.len()]),
+                device,
+            ),
+            control: to_tensor(ctrl.flags.clone(), [1, window, N_MAX], device),
+        };
+        let shape = [1, window, GROUP_DIMS];
+        let mut cues = Vec::new();
+        let mut init = None;
+        if let Some(p) = &prefix {
+            let mut value = p.clone();
+            value.resize(window * GROUP_DIMS, 0.0);
+            let mut mask = vec![0f32; window * GROUP_DIMS];
+            for f in 0..half {
+                for s in 0..n {
+                    for c in 0..DIMS {
+                        mask[f * GROUP_DIMS + channel(s, c)] = 1.0;
+                    }
+                }
+            }
+            let value = to_tensor(value, shape, device);
+            let mask = to_tensor(mask, shape, device);
+            // Eq. 19: the prefix noised to the first step, fresh noise after it.
+            let first_t = schedule.timesteps() - 1;
+            let noised = schedule.q_sample(value.clone(), &[first_t], rng.tensor(shape, device));
+            let fresh = rng.tensor(shape, device);
+            init = Some(noised * mask.clone() + fresh * (mask.clone().neg() + 1.0));
+            cues.push(Cue {
+                value,
+                mask,
+                noised: opts.prefix == PrefixMode::Renoised,
+                activity: CueActivity::Hard,
+            });
+        }
+        if ctrl.mask.iter().any(|&m| m > 0.0) {
+            cues.push(Cue {
+                value: to_tensor(ctrl.values, shape, device),
+                mask: to_tensor(ctrl.mask, shape, device),
+                noised: false,
+                activity: CueActivity::Hard,
+            });
+        }
+        let guided = (opts.guidance - 1.0).abs() >= 1e-9;
+        let model = PreparedGroupDenoiser::new(net, cond.clone(), guided);
+        let so = sample_options(opts, opts.seed.wrapping_add(w as u64 + 1), cues, init);
+        let x = host(sample_with(
+            &model,
+            schedule,
+            shape,
+            Some(&cond),
+            &so,
+            device,
+            hook,
+            &|x| x,
+        )?);
+        let mut x = permute(&x, &perm, true);
+        shift_roots(&mut x, n, origin);
+        let skip = if w == 0 { 0 } else { half };
+        out.extend_from_slice(&x[skip * GROUP_DIMS..]);
+    }
+    denormalise(&mut out, &scale, &shift, n);
+    Ok(out)
+}
+
+/// Normalised → raw, in place; slots `n..` set to zero.
+fn denormalise(frames: &mut [f32], scale: &[f32], shift: &[f32], n: usize) {
+    for f in frames.chunks_exact_mut(GROUP_DIMS) {
+        for (c, v) in f.iter_mut().enumerate() {
+            *v = if c / DIMS < n {
+                *v * scale[c] + shift[c]
+            } else {
+                0.0
+            };
+        }
+    }
+}
+
+/// EDGE's overwrite for centroid-relative group windows: window `i`'s first half becomes
+/// window `i − 1`'s second half, re-based so the group's centroid at its first frame is 0.
+pub fn overwrite_first_halves_rebased(
+    x: &[f32],
+    windows: usize,
+    window: usize,
+    n: usize,
+) -> Vec<f32> {
+    let half = window / 2;
+    let mut out = x.to_vec();
+    for w in 1..windows {
+        let src = &x[((w - 1) * window + half) * GROUP_DIMS..w * window * GROUP_DIMS];
+        let origin = centroid(&src[..GROUP_DIMS], n);
+        let mut p = src.to_vec();
+        shift_roots(&mut p, n, [-origin[0], -origin[1]]);
+        out[w * window * GROUP_DIMS..(w * window + half) * GROUP_DIMS].copy_from_slice(&p);
+    }
+    out
+}
+
+fn parallel(
+    net: &GroupDenoiser,
+    schedule: &Schedule,
+    window: usize,
+    req: &GroupRequest,
+    opts: &GroupSampleOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Vec<f32>, Cancelled> {
+    let n = req.dancers;
+    let half = window / 2;
+    let l = window_count(req.frames, window);
+    let (scale, shift) = group_stats(net);
+    let identity: Vec<usize> = (0..n).collect();
+    let mut music = Vec::with_capacity(l * window * MUSIC_DIMS);
+    let mut flags = Vec::new();
+    let mut values = Vec::new();
+    let mut mask = Vec::new();
+    let mut swap = Vec::new();
+    let mut origins = Vec::with_capacity(l);
+    for w in 0..l {
+        let start = w * half;
+        music.extend(music_window(req.music, req.frames, start, window));
+        // A window's origin is known in advance only where the whole group is requested at
+        // its first frame; elsewhere its control is dropped (module docs).
+        let known: Option<Vec<RootXy>> = req.control.and_then(|c| {
+            (0..n)
+                .map(|d| {
+                    if start < req.frames {
+                        c[start * N_MAX + d]
+                    } else {
+                        None
+                    }
+                })
+                .collect()
+        });
+        let origin = match &known {
+            Some(_) => {
+                let sub = GroupRequest {
+                    control: req.control.map(|c| &c[start * N_MAX..]),
+                    ..*req
+                };
+                first_origin(&sub, &scale)
+            }
+            None => [0.0, 0.0],
+        };
+        let ctrl = window_control(req, start, window, &identity, origin, &scale);
+        if known.is_some() {
+            flags.extend(ctrl.flags);
+            values.extend(ctrl.values);
+            mask.extend(ctrl.mask);
+        } else {
+            flags.extend(vec![0f32; window * N_MAX]);
+            values.extend(vec![0f32; window * GROUP_DIMS]);
+            mask.extend(vec![0f32; window * GROUP_DIMS]);
+        }
+        swap.extend(ctrl.swap);
+        origins.push(known.map(|_| origin));
+    }
+    let cond = GroupCond {
+        music: to_tensor(music, [l, window, MUSIC_DIMS], device),
+        dancers: vec![n; l],
+        swap: Tensor::from_data(TensorData::new(swap, [l, N_MAX * N_MAX]), device),
+        control: to_tensor(flags, [l, window, N_MAX], device),
+    };
+    let shape = [l, window, GROUP_DIMS];
+    let mut cues = Vec::new();
+    if mask.iter().any(|&m| m > 0.0) {
+        cues.push(Cue {
+            value: to_tensor(values, shape, device),
+            mask: to_tensor(mask, shape, device),
+            noised: false,
+            activity: CueActivity::Hard,
+        });
+    }
+    let guided = (opts.guidance - 1.0).abs() >= 1e-9;
+    let model = PreparedGroupDenoiser::new(net, cond.clone(), guided);
+    let so = sample_options(opts, opts.seed, cues, None);
+    let rebase = |x: Tensor<3>| {
+        let h = host(x);
+        to_tensor(
+            overwrite_first_halves_rebased(&h, l, window, n),
+            shape,
+            device,
+        )
+    };
+    let mut win = host(sample_with(
+        &model,
+        schedule,
+        shape,
+        Some(&cond),
+        &so,
+        device,
+        hook,
+        &rebase,
+    )?);
+    // Place: window w's frame 0 is window w − 1's frame `half` (or its requested origin).
+    for w in 0..l {
+        let origin = match (w, origins[w]) {
+            (_, Some(o)) => o,
+            (0, None) => [0.0, 0.0],
+            (_, None) => {
+                let prev = ((w - 1) * window + half) * GROUP_DIMS;
+                centroid(&win[prev..prev + GROUP_DIMS], n)
+            }
+        };
+        shift_roots(
+            &mut win[w * window * GROUP_DIMS..(w + 1) * window * GROUP_DIMS],
+            n,
+            origin,
+        );
+    }
+    denormalise(&mut win, &scale, &shift, n);
+    let layout = ChannelLayout {
+        rot6d: (0..n)
+            .map(|s| channel(s, ROT6D_START)..channel(s, DIMS))
+            .collect(),
+    };
+    let stitched = stitch(to_tensor(win, shape, device), &layout);
+    let mut out = stitched
+        .into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .expect("f32");
+    denormalise(&mut out, &[1.0; GROUP_DIMS], &[0.0; GROUP_DIMS], n);
+    Ok(out)
+}
