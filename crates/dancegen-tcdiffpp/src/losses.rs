@@ -157,11 +157,17 @@ pub fn group_loss(
         (vel(pred.clone()) - vel(x0.clone())).powf_scalar(2.0).sum() / (per_frame * (t - 1) as f64);
 
     let skel = FkSkeleton::smpl24();
-    let raw_pred = net.denorm.apply(to_tokens(pred.clone()));
-    let raw_gt = net.denorm.apply(to_tokens(x0.clone()));
+    // Empty slots get the rest pose before FK: a zero 6D vector has no direction, and the
+    // gradient of its normalisation is infinite (∞ · 0 mask = NaN in every weight).
+    let slot_mask = crate::layout::token_mask(&batch.dancers, t, &device);
+    let rest = rest_pose(&device);
+    let valid =
+        |raw: Tensor<3>| raw * slot_mask.clone() + rest.clone() * (slot_mask.clone().neg() + 1.0);
+    let raw_pred = valid(net.denorm.apply(to_tokens(pred.clone())));
+    let raw_gt = valid(net.denorm.apply(to_tokens(x0.clone())));
     let jp = joints(raw_pred.clone(), &skel); // [B, T·N, 24, 3]
     let jg = joints(raw_gt.clone(), &skel);
-    let tok_mask = crate::layout::token_mask(&batch.dancers, t, &device).unsqueeze_dim::<4>(3);
+    let tok_mask = slot_mask.unsqueeze_dim::<4>(3);
     let joint_count = (active * t * 24 * 3) as f64;
     let fk = ((jp.clone() - jg) * tok_mask.clone())
         .powf_scalar(2.0)
@@ -204,6 +210,16 @@ pub fn group_loss(
             ("distance", distance),
         ],
     }
+}
+
+/// One EDGE-151 frame at the origin in the rest pose (identity 6D per joint), `[1, 1, 151]`.
+fn rest_pose(device: &Device) -> Tensor<3> {
+    let mut v = vec![0f32; DIMS];
+    for j in 0..24 {
+        v[dancegen_nn::edge151::rot6d(j, 0)] = 1.0;
+        v[dancegen_nn::edge151::rot6d(j, 4)] = 1.0;
+    }
+    Tensor::<1>::from_data(TensorData::new(v, [DIMS]), device).reshape([1, 1, DIMS])
 }
 
 /// Eq. 16–17 on raw windows `[B, T, N_MAX·151]` (roots in metres): per element, the sum over
