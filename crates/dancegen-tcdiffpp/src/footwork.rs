@@ -14,7 +14,7 @@ use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, rot6d};
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::{leaky_relu, sigmoid};
-use burn::tensor::{Device, Int, Tensor, TensorData};
+use burn::tensor::{Device, Tensor, TensorData};
 
 use crate::layout::N_MAX;
 
@@ -112,10 +112,4 @@ impl FootworkAdaptor {
         let keep = sel.clone().neg() + 1.0;
         raw * keep + adapted * sel
     }
-}
-
-/// Channel indices as an Int tensor (for `select`).
-pub fn index_tensor(channels: &[usize], device: &Device) -> Tensor<1, Int> {
-    let v: Vec<i64> = channels.iter().map(|&c| c as i64).collect();
-    Tensor::from_data(TensorData::new(v, [channels.len()]), device)
 }
