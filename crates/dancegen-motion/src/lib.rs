@@ -20,6 +20,7 @@ pub mod gltf;
 pub mod pickle;
 pub mod repr;
 pub mod retarget;
+pub mod rng;
 pub mod rotation;
 pub mod skeleton;
 pub mod smoothing;
