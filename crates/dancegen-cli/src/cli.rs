@@ -446,6 +446,9 @@ pub enum PairingArg {
     Aistpp,
     /// FineDance layout under --root: motion/*.npy, music_wav/*.wav, label_json/*.json.
     Finedance,
+    /// 2-5 dancers composed from the --motion takes into formations (CMU couples keep their
+    /// real placement), beat-warped onto the --music songs; OUT/group/<clip>/dancer_<k>.npz.
+    Group,
 }
 
 /// `FROM=TO` of `--merge-genre`.
@@ -491,9 +494,22 @@ pub struct DatasetBuildArgs {
     /// Data set root for --pairing aistpp / finedance.
     #[arg(long, value_name = "DIR")]
     pub root: Option<PathBuf>,
-    /// Breaks exact ties between songs.
+    /// Breaks exact ties between songs; seeds the group composition.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// --pairing group: training samples to compose.
+    #[arg(long, value_name = "N", default_value_t = 200)]
+    pub samples: usize,
+    /// --pairing group: held-out samples (from held-out takes, songs and shapes).
+    #[arg(long, value_name = "N", default_value_t = 24)]
+    pub held_out_samples: usize,
+    /// --pairing group: length of a sample in seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = 10.0)]
+    pub clip_seconds: f64,
+    /// --pairing group: formation shapes only held-out samples use (line, column, v,
+    /// inverted_v, triangle, diamond, circle, arc, two_rows, cluster).
+    #[arg(long = "hold-out-shape", num_args = 1.., value_name = "SHAPE")]
+    pub hold_out_shape: Vec<String>,
     /// Output directory.
     #[arg(short, long, value_name = "OUT_DIR")]
     pub output: PathBuf,

@@ -40,6 +40,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
             PairingArg::Dd100 => Pairing::Dd100,
             PairingArg::Aistpp => Pairing::Aistpp,
             PairingArg::Finedance => Pairing::FineDance,
+            PairingArg::Group => Pairing::Group,
         },
         motions: args.motion.clone(),
         music: args.music.clone(),
@@ -51,6 +52,12 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         mirror: args.mirror,
         songs_per_motion: args.songs_per_motion,
         merge_genres: args.merge_genre.clone(),
+        group: dancegen_dataset::group::GroupOptions {
+            samples: args.samples,
+            held_out_samples: args.held_out_samples,
+            clip_seconds: args.clip_seconds,
+            hold_out_shapes: args.hold_out_shape.clone(),
+        },
     };
     let pb = ProgressBar::new(0);
     if quiet {

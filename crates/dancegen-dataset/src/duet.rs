@@ -33,7 +33,7 @@ struct Couple {
 }
 
 /// The couple key of a stem: everything after the first `_` (`60_01_scaled` → `01_scaled`).
-fn couple_key(stem: &str) -> Option<&str> {
+pub(crate) fn couple_key(stem: &str) -> Option<&str> {
     stem.split_once('_')
         .map(|(_, rest)| rest)
         .filter(|r| !r.is_empty())
@@ -94,7 +94,7 @@ fn couples(opts: &BuildOptions) -> Result<Vec<Couple>, DatasetError> {
     Ok(out)
 }
 
-fn slice(m: &SmplMotion, r: std::ops::Range<usize>) -> SmplMotion {
+pub(crate) fn slice(m: &SmplMotion, r: std::ops::Range<usize>) -> SmplMotion {
     SmplMotion {
         fps: m.fps,
         poses: m.poses[r.start * POSE_DIMS..r.end * POSE_DIMS].to_vec(),

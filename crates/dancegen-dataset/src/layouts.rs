@@ -218,7 +218,7 @@ pub(crate) fn build_layout(
     let mut pairs = match opts.pairing {
         Pairing::Aistpp => aistpp_pairs(opts)?,
         Pairing::FineDance => finedance_pairs(opts)?,
-        Pairing::Pseudo | Pairing::Duet | Pairing::Dd100 => {
+        Pairing::Pseudo | Pairing::Duet | Pairing::Dd100 | Pairing::Group => {
             unreachable!("build_layout is only called for the layouts")
         }
     };

@@ -11,7 +11,7 @@
 //! OUT/manifest.json            see [`manifest::Manifest`]
 //! ```
 //!
-//! Five ways to pair ([`Pairing`]):
+//! Six ways to pair ([`Pairing`]):
 //! - **pseudo** ([`Pairing::Pseudo`]): no data set here pairs dance with music, so each motion
 //!   is time-warped onto the beats of a song ([`warp`]). This is a documented *pseudo*-pairing,
 //!   not ground truth: the dancer never heard that song.
@@ -19,6 +19,8 @@
 //!   one clip per role assignment ([`duet`]).
 //! - **dd100**: Duolando's duet data set under `--root` ([`dd100`]), its own pairing.
 //! - **aistpp** / **finedance**: the data sets' own pairing ([`layouts`]).
+//! - **group**: 2–5 dancers composed from real takes into formations, beat-warped onto songs
+//!   ([`group`]; `OUT/group/<clip>/dancer_<k>.npz` and `OUT/trajectories/<clip>.npy`).
 //!
 //! Music features are computed once per song over the whole song (as the reference repos do)
 //! and the clip's frames are sliced from that matrix, so a clip's beat/onset columns are the
@@ -30,6 +32,7 @@ pub mod dd100;
 pub mod duet;
 pub mod error;
 pub mod genre;
+pub mod group;
 pub mod layouts;
 pub mod manifest;
 /// The beat warp lives in the motion crate (the generation library aligns generated dances with
@@ -52,7 +55,7 @@ use dancegen_music::features::{EDGE35_DIM, ExtractOptions, FeatureSet, extract};
 use rayon::prelude::*;
 
 pub use error::DatasetError;
-pub use manifest::{ClipEntry, MANIFEST_VERSION, Manifest, PairingKind, WarpReport};
+pub use manifest::{ClipEntry, GroupLabels, MANIFEST_VERSION, Manifest, PairingKind, WarpReport};
 use warp::{BeatMatch, WarpParams, match_beats, warp_motion};
 
 /// Frame rate of every clip (motion and music), EDGE/Lodge's 30 fps.
@@ -79,6 +82,9 @@ pub enum Pairing {
     Aistpp,
     /// FineDance layout under `root` (`motion/*.npy`, `music_wav/*.wav`, `label_json/*.json`).
     FineDance,
+    /// 2–5 dancers composed from `--motion` takes into formations and beat-warped onto
+    /// `--music` songs; see [`group`].
+    Group,
 }
 
 /// Options of [`build`].
@@ -113,6 +119,8 @@ pub struct BuildOptions {
     /// its own is folded into a related one (e.g. the single CMU "dance, whirl" take into
     /// `modern`). Applied to every pairing's manifest.
     pub merge_genres: Vec<(String, String)>,
+    /// Group pairing only ([`group`]).
+    pub group: group::GroupOptions,
 }
 
 impl BuildOptions {
@@ -131,6 +139,7 @@ impl BuildOptions {
             mirror: false,
             songs_per_motion: 1,
             merge_genres: Vec::new(),
+            group: group::GroupOptions::default(),
         }
     }
 }
@@ -354,6 +363,7 @@ pub(crate) fn write_clip(out: &Path, c: &ClipData) -> Result<ClipEntry, DatasetE
         pairing: c.pairing,
         warp: c.warp.clone(),
         leader: None,
+        group: None,
     })
 }
 
@@ -410,6 +420,7 @@ pub(crate) fn write_couple_clip(
         pairing: PairingKind::PseudoBeatWarp,
         warp: Some(warp),
         leader: Some(leader_rel),
+        group: None,
     })
 }
 
@@ -459,6 +470,7 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
         Pairing::Duet => duet::build_duet(opts, progress)?,
         Pairing::Dd100 => dd100::build_dd100(opts, progress)?,
         Pairing::Aistpp | Pairing::FineDance => layouts::build_layout(opts, progress)?,
+        Pairing::Group => group::build_group(opts, progress)?,
     };
     for c in &mut clips {
         if let Some(to) = merges.get(&c.genre) {

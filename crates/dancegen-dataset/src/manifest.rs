@@ -53,6 +53,34 @@ pub struct ClipEntry {
     /// manifest's directory).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub leader: Option<String>,
+    /// Group data sets: the composition's labels; `motion` is then a directory of
+    /// `dancer_<k>.npz` files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<GroupLabels>,
+}
+
+/// What a composed group sample is made of (`--pairing group`, [`crate::group`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GroupLabels {
+    /// Number of dancers `N` (files `dancer_0.npz` … `dancer_{N-1}.npz`).
+    pub dancers: usize,
+    /// Dancer index pairs recorded together (a real couple); exempt from the collision rule.
+    pub partners: Vec<[usize; 2]>,
+    /// Dancer indices left to right as the audience sees them (ascending x) at the first frame.
+    pub start_order: Vec<usize>,
+    /// The same at the last frame.
+    pub end_order: Vec<usize>,
+    /// Formation shapes in the order they are held.
+    pub shapes: Vec<String>,
+    /// Transitions between them (`direct`, `lateral_swap`, `upstage_pass`).
+    pub transitions: Vec<String>,
+    /// `unison`, `canon` or `contrast`.
+    pub timing: String,
+    /// `(N, T, 2)` float32 root `[x, z]` per dancer and frame (metres), relative to the
+    /// manifest's directory.
+    pub trajectories: String,
+    /// Per dancer: the source take's file stem (`_mirror` appended when mirrored).
+    pub sources: Vec<String>,
 }
 
 /// `manifest.json`.
