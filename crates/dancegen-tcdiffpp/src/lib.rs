@@ -26,3 +26,4 @@ pub mod layout;
 pub mod losses;
 pub mod sampler;
 pub mod swap;
+pub mod window;

@@ -195,7 +195,7 @@ fn window_control(
 }
 
 /// Slot order sorting the first `n` slots of one group frame left to right (stage x).
-fn sorted_slots(frame: &[f32], n: usize) -> Vec<usize> {
+pub(crate) fn sorted_slots(frame: &[f32], n: usize) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..n).collect();
     idx.sort_by(|&a, &b| {
         frame[channel(a, ROOT_HORIZONTAL[0])]
@@ -207,7 +207,7 @@ fn sorted_slots(frame: &[f32], n: usize) -> Vec<usize> {
 
 /// `frames` `[T, N_MAX·151]` with slot `s` taken from dancer `perm[s]` (`inverse = false`) or
 /// dancer `perm[s]` taken from slot `s` (`inverse = true`).
-fn permute(frames: &[f32], perm: &[usize], inverse: bool) -> Vec<f32> {
+pub(crate) fn permute(frames: &[f32], perm: &[usize], inverse: bool) -> Vec<f32> {
     let mut out = frames.to_vec();
     for (src, dst) in frames
         .chunks_exact(GROUP_DIMS)

@@ -114,6 +114,11 @@ pub enum Representation {
     /// Duet pairs (`dancegen_motion::repr::duet`): per frame the follower's 151 values
     /// (relative to its leader) then the leader's 220 features; needs `[data] leader`.
     Duet,
+    /// Groups of 2–5 dancers (`dancegen dataset build --pairing group`): every directory under
+    /// `[data] paths` is one clip of `dancer_<k>.npz` files, a frame is `[5 × 151]` EDGE-151
+    /// (dancer `k` in slot `k`, absent dancers zero). Windows reach the task raw; the task
+    /// sorts, re-bases and normalises them (the normaliser is one dancer's 151 channels).
+    Group,
 }
 
 /// How the per-dimension statistics map the data.

@@ -36,6 +36,8 @@ pub struct Clip {
     pub music: Option<Vec<f32>>,
     /// Index into the manifest's genre list.
     pub genre: Option<usize>,
+    /// Group clips: the number of dancers (slots `0..n` of each frame).
+    pub dancers: Option<usize>,
 }
 
 /// A batch on the training device.
@@ -50,6 +52,8 @@ pub struct Batch {
     /// Seed of the batch's own randomness (diffusion timesteps, masks, …): a function of the
     /// run seed and the data position, so a resumed run draws the same numbers.
     pub seed: u64,
+    /// Group windows: the dancers of each batch element.
+    pub dancers: Option<Vec<usize>>,
 }
 
 /// Per-dimension statistics saved with the model (`normalizer.json`).
@@ -177,7 +181,138 @@ pub fn representation_dims(r: Representation) -> usize {
         Representation::Lodge139 => Lodge139::DIMS,
         Representation::Humanml263 => 263,
         Representation::Duet => DuetFollower::DIMS + DuetLeader::DIMS,
+        Representation::Group => GROUP_SLOTS * Edge151::DIMS,
     }
+}
+
+/// Dancer slots of a group frame (TCDiff++'s N_max; `dancegen_motion::formation` templates go
+/// up to the same count).
+pub const GROUP_SLOTS: usize = dancegen_motion::formation::shapes::MAX_DANCERS;
+
+/// Per-channel mean and std of one dancer's EDGE-151 frames over the active slots of group
+/// clips, roots relative to each clip's frame-0 centroid (group.md §5 P3: fitted once on the
+/// training set, never per sample).
+pub fn fit_group_normalizer(clips: &[Clip]) -> Result<Normalizer, String> {
+    let d = Edge151::DIMS;
+    let mut per_dancer = Vec::new();
+    for c in clips {
+        let n = c.dancers.ok_or("a group normaliser needs group clips")?;
+        let dims = GROUP_SLOTS * d;
+        let (cx, cz) = group_centroid(&c.motion[..dims.min(c.motion.len())], n);
+        for row in c.motion.chunks_exact(dims) {
+            for s in 0..n {
+                let mut v = row[s * d..(s + 1) * d].to_vec();
+                v[ROOT_X] -= cx;
+                v[ROOT_HORIZONTAL_2] -= cz;
+                per_dancer.extend(v);
+            }
+        }
+    }
+    let one = Clip {
+        source: PathBuf::new(),
+        frames: per_dancer.len() / d,
+        motion: per_dancer,
+        music: None,
+        genre: None,
+        dancers: None,
+    };
+    Normalizer::fit(NormalizerKind::MeanStd, std::slice::from_ref(&one), d)
+}
+
+/// EDGE-151's Z-up root x and y channels (horizontal; `dancegen_nn::edge151::ROOT_HORIZONTAL`).
+const ROOT_X: usize = 4;
+const ROOT_HORIZONTAL_2: usize = 5;
+
+/// Root centroid of the first `n` slots of one group frame.
+fn group_centroid(frame: &[f32], n: usize) -> (f32, f32) {
+    let d = Edge151::DIMS;
+    let (mut x, mut z) = (0f32, 0f32);
+    for s in 0..n {
+        x += frame[s * d + ROOT_X];
+        z += frame[s * d + ROOT_HORIZONTAL_2];
+    }
+    (x / n.max(1) as f32, z / n.max(1) as f32)
+}
+
+/// Reads one group clip directory: `dancer_0.npz`, `dancer_1.npz`, … at `c.fps`.
+pub fn load_group_clip(dir: &Path, c: &DataConfig) -> Result<Clip, TrainError> {
+    let data_err = |reason: String| TrainError::Data {
+        path: dir.to_path_buf(),
+        reason,
+    };
+    let mut dancers = Vec::new();
+    for k in 0.. {
+        let p = dir.join(format!("dancer_{k}.npz"));
+        if !p.is_file() {
+            break;
+        }
+        let mut d = load_dancers(&p, c)?;
+        if d.len() != 1 {
+            return Err(data_err(format!(
+                "{}: {} dancers, expected one",
+                p.display(),
+                d.len()
+            )));
+        }
+        dancers.push(d.pop().expect("one"));
+    }
+    let n = dancers.len();
+    if !(2..=GROUP_SLOTS).contains(&n) {
+        return Err(data_err(format!(
+            "{n} dancer files (dancer_0.npz, …): a group clip has 2 to {GROUP_SLOTS}"
+        )));
+    }
+    let enc: Vec<Vec<f32>> = dancers
+        .iter()
+        .map(Edge151::encode)
+        .collect::<Result<_, _>>()
+        .map_err(|e| data_err(e.to_string()))?;
+    let d = Edge151::DIMS;
+    let mut frames = enc.iter().map(|e| e.len() / d).min().unwrap_or(0);
+    let music = match &c.music {
+        Some(m) => {
+            let (f, t) = load_music(dir, &m.dir, m.dims)?;
+            frames = frames.min(t);
+            Some(f[..frames * m.dims].to_vec())
+        }
+        None => None,
+    };
+    let mut motion = vec![0f32; frames * GROUP_SLOTS * d];
+    for (k, e) in enc.iter().enumerate() {
+        for f in 0..frames {
+            motion[(f * GROUP_SLOTS + k) * d..(f * GROUP_SLOTS + k + 1) * d]
+                .copy_from_slice(&e[f * d..(f + 1) * d]);
+        }
+    }
+    Ok(Clip {
+        source: dir.to_path_buf(),
+        frames,
+        motion,
+        music,
+        genre: None,
+        dancers: Some(n),
+    })
+}
+
+/// The clip directories under `paths` (each a directory of `dancer_<k>.npz`, sorted).
+pub fn group_dirs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrainError> {
+    let mut out = Vec::new();
+    for p in paths {
+        let rd = std::fs::read_dir(p).map_err(|e| TrainError::io(p, e))?;
+        let mut dirs: Vec<PathBuf> = rd
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|d| d.join("dancer_0.npz").is_file())
+            .collect();
+        dirs.sort();
+        if dirs.is_empty() {
+            return Err(TrainError::Data {
+                path: p.clone(),
+                reason: "no group clip directories (<clip>/dancer_0.npz …)".into(),
+            });
+        }
+        out.extend(dirs);
+    }
+    Ok(out)
 }
 
 fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
@@ -186,6 +321,7 @@ fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
         Representation::Lodge139 => Lodge139::encode(m),
         Representation::Humanml263 => HumanMl263::encode(m),
         Representation::Duet => unreachable!("duet clips are encoded in pairs (encode_duet)"),
+        Representation::Group => unreachable!("group clips are read by load_group_clip"),
     }
     .map_err(|e| e.to_string())
 }
@@ -316,6 +452,7 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
             motion,
             music,
             genre: None,
+            dancers: None,
         });
     }
     Ok(clips)
@@ -430,8 +567,17 @@ impl WindowDataset {
             None => None,
         };
         let mut clips = Vec::new();
-        for f in motion_files(&c.paths)? {
-            let mut loaded = load_clips(&f, c)?;
+        let files = if c.representation == Representation::Group {
+            group_dirs(&c.paths)?
+        } else {
+            motion_files(&c.paths)?
+        };
+        for f in files {
+            let mut loaded = if c.representation == Representation::Group {
+                vec![load_group_clip(&f, c)?]
+            } else {
+                load_clips(&f, c)?
+            };
             if let Some(g) = &genres {
                 // Genre-conditioned models need every clip's genre: a clip missing from the
                 // manifest is a data error here, not a panic in the middle of training.
@@ -570,12 +716,17 @@ impl WindowDataset {
             BATCH_STREAM,
             next.epoch.wrapping_mul(1 << 32) ^ next.cursor as u64,
         );
+        let dancers: Option<Vec<usize>> = idx
+            .iter()
+            .map(|&i| self.clips[self.windows[i].0].dancers)
+            .collect();
         (
             Batch {
                 motion,
                 music,
                 genre,
                 seed,
+                dancers,
             },
             next,
         )

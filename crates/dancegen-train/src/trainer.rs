@@ -249,20 +249,32 @@ fn run<T: TrainTask>(
     let clips = WindowDataset::read_clips(&config.data)?;
     let norm_path = dir.join(files::NORMALIZER);
     std::fs::create_dir_all(dir.join(files::CHECKPOINTS)).map_err(|e| TrainError::io(&dir, e))?;
+    let group = config.data.representation == crate::config::Representation::Group;
     let normalizer = if ckpt.is_some() {
         Normalizer::load(&norm_path)?
     } else {
         let dims = crate::data::representation_dims(config.data.representation);
-        let n = Normalizer::fit(config.data.normalizer, &clips, dims).map_err(|reason| {
-            TrainError::Data {
-                path: config.data.paths[0].clone(),
-                reason,
-            }
+        let fitted = if group {
+            // One dancer's 151 channels; the task normalises each window after re-basing it.
+            crate::data::fit_group_normalizer(&clips)
+        } else {
+            Normalizer::fit(config.data.normalizer, &clips, dims)
+        };
+        let n = fitted.map_err(|reason| TrainError::Data {
+            path: config.data.paths[0].clone(),
+            reason,
         })?;
         n.save(&norm_path)?;
         n
     };
-    let data = WindowDataset::new(clips, &config.data, &normalizer, seed)?;
+    let window_norm = if group {
+        Normalizer::None {
+            dims: crate::data::representation_dims(config.data.representation),
+        }
+    } else {
+        normalizer.clone()
+    };
+    let data = WindowDataset::new(clips, &config.data, &window_norm, seed)?;
     if ckpt.is_none() {
         // The run directory exists (and claims the run) only once the data is known to load.
         let cfg_path = dir.join(files::CONFIG);

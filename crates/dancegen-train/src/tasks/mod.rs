@@ -9,17 +9,19 @@ use crate::{TrainConfig, TrainError, files};
 pub mod lodgepp;
 pub mod motion_autoencoder;
 pub mod reactdance;
+pub mod tcdiffpp;
 
 pub use motion_autoencoder::MotionAutoencoderTask;
 
 /// Every `[model] kind` with a task.
-pub const KINDS: [&str; 6] = [
+pub const KINDS: [&str; 7] = [
     motion_autoencoder::KIND,
     lodgepp::VQVAE,
     lodgepp::GPT,
     lodgepp::PDDM,
     reactdance::HFSQ,
     reactdance::LDM,
+    tcdiffpp::KIND,
 ];
 
 /// Starts a new run of the task `config` names (`config_path` for error messages).
@@ -62,6 +64,12 @@ pub fn train_config(
             config,
             opts,
         ),
+        tcdiffpp::KIND => trainer::train(
+            &tcdiffpp::GroupTask::from_config(config)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }
@@ -98,6 +106,12 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
         ),
         reactdance::LDM => trainer::resume(
             &reactdance::LdmTask::from_config(&config, &path)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        tcdiffpp::KIND => trainer::resume(
+            &tcdiffpp::GroupTask::from_config(&config)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,
