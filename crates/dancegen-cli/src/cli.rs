@@ -54,6 +54,11 @@ pub enum SamplerArg {
     Autoregressive,
     /// Duet: Blocked Local Context, every block of the follower at once (ReactDance).
     Blc,
+    /// Group: long group diffusion sampling, window after window (TCDiff++ LGDS, window 0
+    /// kept).
+    Lgds,
+    /// Group: every window at once with EDGE's first-half overwrite and stitching.
+    Parallel,
 }
 
 /// How `generate` reports progress on stderr.
@@ -97,11 +102,24 @@ pub struct GenerateArgs {
     /// Duet: write the follower alone to every output.
     #[arg(long, requires = "leader")]
     pub follower_only: bool,
-    /// Duet: keep the follower exactly where the model put it, even where its body passes
-    /// through the leader's (by default a smooth horizontal shift moves it out; hands may
-    /// touch).
-    #[arg(long, requires = "leader")]
+    /// Duet and group: keep the dancers exactly where the model put them, even where one
+    /// body passes through another (by default a smooth horizontal shift moves them apart;
+    /// hands may touch).
+    #[arg(long)]
     pub no_separation: bool,
+    /// Group: number of dancers (2-5). `.npy` then holds `(N, T, 24, 3)`, `.bvh` and `.npz`
+    /// are written once per dancer (`name_0.bvh`, ...), `.json` adds every root trajectory and
+    /// the left-to-right order at the start and at the end.
+    #[arg(long, value_name = "N")]
+    pub dancers: Option<usize>,
+    /// Group: where each dancer should be and when: {"keyframes": [{"t": seconds, "positions":
+    /// [[x, z] or null, ... one per dancer]}, ...]}, metres, x to the audience's right, +z
+    /// towards the audience; minimum-jerk paths between keyframes. Default: the model chooses.
+    #[arg(long, value_name = "FORMATION.json")]
+    pub formation: Option<PathBuf>,
+    /// Group: every dancer dances the same moves (the leftmost dancer's), each on its own path.
+    #[arg(long)]
+    pub unison: bool,
     /// Duet: guidance s of the coarse (base) HFSQ level, x̂0 = (1 + s)·cond − s·uncond
     /// (default: the model's).
     #[arg(long, requires = "leader")]
@@ -198,7 +216,11 @@ pub struct BundleArgs {
     /// Finished `reactdance_ldm` run directory (duet model).
     #[arg(long, value_name = "RUN", requires = "hfsq")]
     pub ldm: Option<PathBuf>,
-    /// Model name written to model.toml (default: lodgepp-small, or reactdance-small).
+    /// Finished `tcdiffpp_group` run directory (group model).
+    #[arg(long, value_name = "RUN", conflicts_with_all = ["vqvae", "hfsq"])]
+    pub group: Option<PathBuf>,
+    /// Model name written to model.toml (default: lodgepp-small, reactdance-small or
+    /// tcdiffpp-small).
     #[arg(long)]
     pub name: Option<String>,
     #[arg(long)]

@@ -6,11 +6,26 @@ use std::io::Write;
 use anyhow::{Result, bail};
 use dancegen_train::tasks::lodgepp::assemble_bundle;
 use dancegen_train::tasks::reactdance::assemble_duet_bundle;
+use dancegen_train::tasks::tcdiffpp::assemble_group_bundle;
 
 use crate::cli::BundleArgs;
 use crate::progress::spinner;
 
 pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
+    if let Some(run) = &args.group {
+        let name = args.name.as_deref().unwrap_or("tcdiffpp-small");
+        let pb = spinner("assembling the group model", quiet);
+        assemble_group_bundle(run, &args.output, name)?;
+        pb.finish_and_clear();
+        if !quiet {
+            writeln!(
+                std::io::stdout().lock(),
+                "{name} -> {}",
+                args.output.display()
+            )?;
+        }
+        return Ok(());
+    }
     if let (Some(hfsq), Some(ldm)) = (&args.hfsq, &args.ldm) {
         let name = args.name.as_deref().unwrap_or("reactdance-small");
         let pb = spinner("assembling the duet model", quiet);
@@ -26,7 +41,10 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
         return Ok(());
     }
     let (Some(vqvae), Some(gpt), Some(pddm)) = (&args.vqvae, &args.gpt, &args.pddm) else {
-        bail!("give --vqvae, --gpt and --pddm (solo model) or --hfsq and --ldm (duet model)");
+        bail!(
+            "give --vqvae, --gpt and --pddm (solo model), --hfsq and --ldm (duet model) or \
+             --group (group model)"
+        );
     };
     let name = args.name.as_deref().unwrap_or("lodgepp-small");
     let pb = spinner("assembling the model and its key-motion library", quiet);

@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader};
+use dancegen_generate::systems::group::{GroupOptions, LongSampler};
+
 use dancegen_generate::systems::solo::{SoloOptions, SoloSampler};
 use dancegen_generate::{CancelToken, Generator, ModelLocator, Progress, Request, Song};
 use dancegen_generate::{SystemRequest, systems};
@@ -60,11 +62,21 @@ fn request(args: &GenerateArgs) -> Result<Request> {
         ("solo", None) => SystemRequest::Solo(solo_options(args)?),
         ("duet", Some(leader)) => SystemRequest::Duet(duet_options(args, leader)?),
         ("duet", None) => bail!("the duet system dances with a leader: give --leader FILE"),
+        ("group", Some(_)) => bail!("--leader makes a duet; the group system takes no leader"),
+        ("group", None) => SystemRequest::Group(group_options(args)?),
         (other, _) => bail!("--system {other} is not wired into this command yet"),
     };
+    let group = matches!(system, SystemRequest::Group(_));
+    if !group && (args.dancers.is_some() || args.formation.is_some() || args.unison) {
+        bail!("--dancers, --formation and --unison make a group dance: add --system group");
+    }
     let duet = matches!(system, SystemRequest::Duet(_));
     let outputs: Vec<PathBuf> = if args.output.is_empty() {
-        vec![PathBuf::from(if duet { "couple.glb" } else { "dance.glb" })]
+        vec![PathBuf::from(match (duet, group) {
+            (true, _) => "couple.glb",
+            (_, true) => "group.glb",
+            _ => "dance.glb",
+        })]
     } else {
         args.output.clone()
     };
@@ -98,7 +110,13 @@ fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {
         SamplerArg::Edge => SoloSampler::Edge,
         SamplerArg::Autoregressive => SoloSampler::Autoregressive,
         SamplerArg::Blc => bail!("--sampler blc is the duet sampler (use it with --leader)"),
+        SamplerArg::Lgds | SamplerArg::Parallel => {
+            bail!("--sampler lgds/parallel are the group samplers (use them with --system group)")
+        }
     };
+    if args.no_separation {
+        bail!("--no-separation applies to duet and group dances");
+    }
     Ok(SoloOptions {
         sampler,
         foot_refine: !args.no_foot_refine,
@@ -106,6 +124,29 @@ fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {
         foot_lock: !args.no_foot_lock,
         beat_align: !args.no_beat_align,
     })
+}
+
+fn group_options(args: &GenerateArgs) -> Result<GroupOptions> {
+    let Some(n) = args.dancers else {
+        bail!("--system group needs --dancers N (2 to 5)");
+    };
+    let sampler = match args.sampler {
+        None => None,
+        Some(SamplerArg::Lgds) => Some(LongSampler::Lgds),
+        Some(SamplerArg::Parallel) => Some(LongSampler::Parallel),
+        Some(other) => bail!("--sampler {other:?}: the group system samples with lgds or parallel"),
+    };
+    let mut o = GroupOptions {
+        sampler,
+        unison: args.unison,
+        separation: !args.no_separation,
+        foot_lock: !args.no_foot_lock,
+        ..GroupOptions::new(n)
+    };
+    if let Some(f) = &args.formation {
+        o = o.with_formation_file(f)?;
+    }
+    Ok(o)
 }
 
 fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOptions> {

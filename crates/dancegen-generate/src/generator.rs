@@ -16,6 +16,7 @@ use crate::request::{Request, SystemRequest};
 use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer};
 use crate::systems::duet::Duet;
+use crate::systems::group::Group;
 use crate::systems::solo::Solo;
 
 /// Where a job's time went (seconds).
@@ -91,6 +92,7 @@ impl Generator {
         match &request.system {
             SystemRequest::Solo(o) => self.run_system::<Solo>(request, o, on_progress, cancel),
             SystemRequest::Duet(o) => self.run_system::<Duet>(request, o, on_progress, cancel),
+            SystemRequest::Group(o) => self.run_system::<Group>(request, o, on_progress, cancel),
         }
     }
 

@@ -17,7 +17,7 @@ use crate::error::GenerateError;
 use crate::progress::{Tracker, stage};
 use crate::request::{DancerSelection, OutputRequest};
 use crate::song::{AnalysedSong, FPS};
-use crate::system::Dance;
+use crate::system::{Dance, GroupReport};
 
 /// Preview image size.
 pub const PREVIEW_WIDTH: u32 = 640;
@@ -166,7 +166,11 @@ fn select(
         .iter()
         .filter(|d| d.role.generated())
         .collect();
-    let chosen: Vec<_> = if format.holds_many_dancers() && selection == DancerSelection::Auto {
+    // A group's `.npy` is `(N, T, 24, 3)`: every dancer is generated, and external tools
+    // read the whole group from it.
+    let holds_many =
+        format.holds_many_dancers() || (dance.group.is_some() && format == OutputFormat::Npy);
+    let chosen: Vec<_> = if holds_many && selection == DancerSelection::Auto {
         dance.dancers.iter().collect()
     } else {
         generated
@@ -177,7 +181,7 @@ fn select(
             reason: "the dance has no generated dancer to write".into(),
         }),
         [one] => Ok(LoadedMotion::Smpl(one.motion.clone())),
-        many if format.holds_many_dancers() => Ok(LoadedMotion::Group(
+        many if holds_many => Ok(LoadedMotion::Group(
             many.iter().map(|d| d.motion.clone()).collect(),
         )),
         many => Err(GenerateError::Output {
@@ -267,7 +271,30 @@ pub(crate) fn write_all(
     for (p, &n) in planned.iter().zip(&units) {
         tracker.check()?;
         let dest = &p.request.path;
+        if dance.group.is_some() && matches!(p.format, OutputFormat::Bvh | OutputFormat::Npz) {
+            // One file per dancer: `name_0.bvh`, `name_1.bvh`, …
+            for (k, d) in dance.dancers.iter().enumerate() {
+                let one = numbered(dest, k);
+                let tmp = staging.path_for(&one)?;
+                save_motion_file(
+                    &tmp,
+                    &LoadedMotion::Smpl(d.motion.clone()),
+                    &ConvertOptions::default(),
+                )
+                .map_err(|e| about_dest(e, &tmp, &one))?;
+            }
+            done += n;
+            tracker.advance(stage::WRITE_OUTPUTS, done, total);
+            continue;
+        }
         let tmp = staging.path_for(dest)?;
+        if let (Some(g), OutputFormat::Json) = (&dance.group, p.format) {
+            let motion = select(dance, p.request.dancers, p.format, dest)?;
+            write_group_json(&tmp, &motion, g).map_err(|e| about_dest(e, &tmp, dest))?;
+            done += n;
+            tracker.advance(stage::WRITE_OUTPUTS, done, total);
+            continue;
+        }
         let motion = select(dance, p.request.dancers, p.format, dest)?;
         if p.format.is_preview() {
             let tracks = tracks_from_motion(dest, &motion)?;
@@ -305,6 +332,57 @@ pub(crate) fn write_all(
     }
     tracker.check()?;
     staging.commit()
+}
+
+/// `dir/stem_k.ext` for `dir/stem.ext`.
+pub fn numbered(path: &Path, k: usize) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = match path.extension() {
+        Some(e) => format!("{stem}_{k}.{}", e.to_string_lossy()),
+        None => format!("{stem}_{k}"),
+    };
+    path.with_file_name(name)
+}
+
+/// A group dance's `.json`: the stage record ([`GroupReport`]: start and end order, every
+/// dancer's root trajectory, the requested paths and how well they were followed) plus the
+/// joints as every `.json` has them (`joint_names`, `parents`, `shape` `(N, T, 24, 3)`,
+/// `positions`).
+fn write_group_json(
+    out: &Path,
+    motion: &LoadedMotion,
+    g: &GroupReport,
+) -> Result<(), dancegen_motion::formats::FormatError> {
+    use dancegen_motion::skeleton::Skeleton;
+    let (shape, positions) = dancegen_motion::formats::joint_positions(out, motion)?;
+    let s = Skeleton::smpl24();
+    let v = serde_json::json!({
+        "fps": FPS,
+        "up": "y",
+        "units": "metres",
+        "stage": "[x, z]: x to the audience's right, +z towards the audience, origin at the stage centre",
+        "dancers": shape.first().copied().unwrap_or(0),
+        "start_order": g.start_order,
+        "end_order": g.end_order,
+        "trajectories": g.trajectories,
+        "requested": g.requested,
+        "trajectory_error_mean_m": g.trajectory_error_mean_m,
+        "trajectory_error_final_m": g.trajectory_error_final_m,
+        "joint_names": s.names(),
+        "parents": s.parents(),
+        "shape": shape,
+        "positions": positions,
+    });
+    dancegen_io::write_atomic(out, |w| {
+        serde_json::to_writer(&mut *w, &v).map_err(std::io::Error::other)
+    })
+    .map_err(|e| dancegen_motion::formats::FormatError {
+        path: out.to_path_buf(),
+        reason: e.to_string(),
+    })
 }
 
 /// Preview frames of `dance` at `fps` (the render scene's count for the longest dancer).

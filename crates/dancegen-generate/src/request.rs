@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::systems::duet::DuetOptions;
+use crate::systems::group::GroupOptions;
 use crate::systems::solo::SoloOptions;
 
 /// Where the song comes from.
@@ -39,6 +40,8 @@ pub enum SystemRequest {
     Solo(SoloOptions),
     /// The partner of a given leader (ReactDance).
     Duet(DuetOptions),
+    /// 2–5 dancers together (TCDiff++).
+    Group(GroupOptions),
 }
 
 /// Options every system understands; `None` means the model's default.

@@ -20,6 +20,8 @@ pub enum Role {
     Leader,
     /// A duet's generated partner.
     Follower,
+    /// One generated dancer of a group.
+    Member,
 }
 
 impl Role {
@@ -49,6 +51,26 @@ pub struct Dance {
     pub timing_breakdown: String,
     /// Post-processing remarks printed after the timings.
     pub notes: Vec<String>,
+    /// Group dances: where the dancers went (written to `.json`).
+    pub group: Option<GroupReport>,
+}
+
+/// A group dance's stage record (stage frame of `dancegen_motion::formation`: `[x, z]`
+/// metres, x to the audience's right, +z towards the audience).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GroupReport {
+    /// Dancer indices left to right as the audience sees them at the first frame.
+    pub start_order: Vec<usize>,
+    /// The same at the last frame.
+    pub end_order: Vec<usize>,
+    /// `[dancer][frame]` root (pelvis) `[x, z]`.
+    pub trajectories: Vec<Vec<[f64; 2]>>,
+    /// The requested paths (`[dancer][frame]`, `null` where free), when a formation was given.
+    pub requested: Option<Vec<Vec<Option<[f64; 2]>>>>,
+    /// Mean and final distance (metres) between the root and the requested path over the
+    /// constrained frames, when a formation was given.
+    pub trajectory_error_mean_m: Option<f64>,
+    pub trajectory_error_final_m: Option<f64>,
 }
 
 /// Everything a system gets for one job.

@@ -215,6 +215,44 @@ pub fn separation_offsets(
     offsets
 }
 
+/// Sweeps of [`group_separation_offsets`] over all pairs: a push out of one neighbour can put
+/// a dancer into another, so the pairs are visited twice.
+pub const GROUP_SWEEPS: usize = 2;
+
+/// [`separation_offsets`] for a group: horizontal offsets per dancer and frame that keep every
+/// pair's bodies apart. Dancer 0 stays; each later dancer is moved out of every earlier one in
+/// turn (on the joints as already moved), over [`GROUP_SWEEPS`] sweeps. `dancers[d]` are flat
+/// `(T, 24, 3)` world joints in metres, Y up.
+pub fn group_separation_offsets(
+    dancers: &[Vec<f64>],
+    config: &SeparationConfig,
+) -> Vec<Vec<[f64; 2]>> {
+    let mut moved: Vec<Vec<f64>> = dancers.to_vec();
+    let mut total: Vec<Vec<[f64; 2]>> = dancers
+        .iter()
+        .map(|d| vec![[0.0; 2]; d.len() / 72])
+        .collect();
+    for _ in 0..GROUP_SWEEPS {
+        for b in 1..dancers.len() {
+            for a in 0..b {
+                let off = separation_offsets(&moved[b], &moved[a], config);
+                for (f, o) in off.iter().enumerate() {
+                    if o[0] == 0.0 && o[1] == 0.0 {
+                        continue;
+                    }
+                    for p in moved[b][f * 72..(f + 1) * 72].chunks_exact_mut(3) {
+                        p[0] += o[0];
+                        p[2] += o[1];
+                    }
+                    total[b][f][0] += o[0];
+                    total[b][f][1] += o[1];
+                }
+            }
+        }
+    }
+    total
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

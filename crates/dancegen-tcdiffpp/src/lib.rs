@@ -17,6 +17,7 @@
 //! Shared pieces (FiLM decoder layer, Mamba, DDIM sampler with cues, EDGE-151 kinematics,
 //! long-form stitching) come from `dancegen-nn`.
 
+pub mod bundle;
 pub mod config;
 pub mod cross_mamba;
 pub mod denoiser;

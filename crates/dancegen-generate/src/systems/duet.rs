@@ -310,6 +310,7 @@ impl DanceSystem for Duet {
                 out.sample_s, out.decode_s
             ),
             notes,
+            group: None,
         })
     }
 }

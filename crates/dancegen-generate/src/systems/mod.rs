@@ -2,6 +2,7 @@
 //! user may ask for (including the ones not shipped yet, so the error can say so).
 
 pub mod duet;
+pub mod group;
 pub mod solo;
 
 /// A system users can name.
@@ -34,13 +35,7 @@ const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
 pub const SYSTEMS: [SystemInfo; 4] = [
     shipped::<solo::Solo>("Lodge++"),
     shipped::<duet::Duet>("ReactDance"),
-    SystemInfo {
-        name: "group",
-        method: "TCDiff++",
-        model_kind: "",
-        default_model: "",
-        available: false,
-    },
+    shipped::<group::Group>("TCDiff++"),
     SystemInfo {
         name: "holistic",
         method: "SoulNet",

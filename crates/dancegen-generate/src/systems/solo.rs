@@ -159,6 +159,7 @@ impl DanceSystem for Solo {
             ),
             timing_breakdown: String::new(),
             notes,
+            group: None,
         })
     }
 }
@@ -219,7 +220,7 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
 }
 
 /// Lifts every frame whose lowest foot joint is below the floor (y = 0) onto it.
-fn keep_feet_above_floor(m: &mut SmplMotion) -> Result<(), String> {
+pub(crate) fn keep_feet_above_floor(m: &mut SmplMotion) -> Result<(), String> {
     let joints = m.joints_world().map_err(|e| e.to_string())?;
     for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
         let low = FOOT_JOINTS

@@ -141,3 +141,63 @@ impl TrainTask for GroupTask {
         toml::Table::try_from(&self.config).expect("serialises")
     }
 }
+
+/// Writes a group model directory (`dancegen_tcdiffpp::bundle`) from a finished
+/// `tcdiffpp_group` run. Weights are stored in half precision (the normaliser statistics stay
+/// f32).
+pub fn assemble_group_bundle(
+    run: &std::path::Path,
+    out: &std::path::Path,
+    name: &str,
+) -> Result<(), crate::TrainError> {
+    use dancegen_nn::device;
+    use dancegen_nn::weights::{self, Layout};
+    use dancegen_tcdiffpp::bundle::{BundleConfig, KIND as BUNDLE_KIND, files as bundle_files};
+
+    use crate::files;
+
+    let err = |p: &std::path::Path, reason: String| crate::TrainError::Config {
+        path: p.to_path_buf(),
+        reason,
+    };
+    let mp = run.join(files::MODEL_TOML);
+    let text = std::fs::read_to_string(&mp).map_err(|e| crate::TrainError::io(&mp, e))?;
+    let t: toml::Table = toml::from_str(&text).map_err(|e| err(&mp, e.to_string()))?;
+    if t.get("kind").and_then(|k| k.as_str()) != Some(KIND) {
+        return Err(err(&mp, format!("not a finished {KIND} run")));
+    }
+    let config: GroupModelConfig = t
+        .get("config")
+        .cloned()
+        .ok_or_else(|| err(&mp, "no [config]".into()))?
+        .try_into()
+        .map_err(|e: toml::de::Error| err(&mp, e.message().to_string()))?;
+    let dev = device::inference();
+    let d = dancegen_nn::edge151::DIMS;
+    let net = weights::load(
+        config.denoiser.init(&vec![0.0; d], &vec![1.0; d], &dev),
+        &run.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(|e| err(run, e.to_string()))?;
+    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
+    let dp = out.join(bundle_files::DENOISER);
+    weights::save_as(&net, &dp, Layout::Burn, &[], weights::Storage::F16)
+        .map_err(|e| err(&dp, e.to_string()))?;
+    let np = run.join(files::NORMALIZER);
+    let bytes = std::fs::read(&np).map_err(|e| crate::TrainError::io(&np, e))?;
+    let dst = out.join(bundle_files::NORMALIZER);
+    dancegen_io::write_atomic(&dst, |w| w.write_all(&bytes))
+        .map_err(|e| crate::TrainError::io(&dst, e))?;
+    let bundle = BundleConfig {
+        kind: BUNDLE_KIND.into(),
+        name: name.into(),
+        fps: 30.0,
+        model: config,
+    };
+    let text = toml::to_string_pretty(&bundle).expect("config serialises");
+    let mp = out.join(bundle_files::MODEL_TOML);
+    dancegen_io::write_atomic(&mp, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| crate::TrainError::io(&mp, e))?;
+    Ok(())
+}
