@@ -292,7 +292,8 @@ pub struct EvalArgs {
     pub fps: Option<f64>,
     /// Comma-separated metrics (default: all that the inputs allow; duet metrics by default only
     /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,penetration,gmr,gmc,tif,
-    /// fid_cd,div_cd,bed,ipr,contact_range,freeze,inverted,boundary_jerk,genre.
+    /// collision,min_distance,fid_cd,div_cd,bed,ipr,contact_range,freeze,inverted,
+    /// boundary_jerk,genre.
     #[arg(long)]
     pub metrics: Option<String>,
     /// Genre check: the data set manifest (`dancegen dataset build`'s manifest.json) giving the

@@ -457,6 +457,50 @@ pub fn tif(dancers: &[&[f64]], radii: &CapsuleRadii) -> Result<Option<f64>, Feat
     Ok(Some(hits as f64 / flags.len() as f64))
 }
 
+/// Smallest horizontal distance (metres) between two dancers' roots (pelvis joint, x/z) over
+/// all frames and pairs; `None` for fewer than two dancers or zero frames.
+pub fn min_root_distance(dancers: &[&[f64]]) -> Result<Option<f64>, FeatureError> {
+    let frames = scene_frames(dancers, 0, "min_distance")?;
+    let mut best: Option<f64> = None;
+    for t in 0..frames {
+        for a in 0..dancers.len() {
+            for b in a + 1..dancers.len() {
+                let (pa, pb) = (p(dancers[a], t, 0), p(dancers[b], t, 0));
+                let d = (pa[0] - pb[0]).hypot(pa[2] - pb[2]);
+                best = Some(best.map_or(d, |x: f64| x.min(d)));
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// Share of frames (in `[0, 1]`) with a **collision**: two dancers whose roots are closer than
+/// `dancegen_motion::formation::MIN_SEPARATION_M` horizontally, or whose capsule bodies
+/// intersect ([`bodies_intersect`], TIF's bodies). Group.md P10's collision-TIF; every pair
+/// counts (generated dancers have no partners). `None` for zero frames.
+pub fn collision_share(
+    dancers: &[&[f64]],
+    radii: &CapsuleRadii,
+) -> Result<Option<f64>, FeatureError> {
+    let frames = scene_frames(dancers, 0, "collision")?;
+    if frames == 0 {
+        return Ok(None);
+    }
+    let min = dancegen_motion::formation::MIN_SEPARATION_M;
+    let hits = (0..frames)
+        .filter(|&t| {
+            (0..dancers.len()).any(|a| {
+                (a + 1..dancers.len()).any(|b| {
+                    let (pa, pb) = (p(dancers[a], t, 0), p(dancers[b], t, 0));
+                    (pa[0] - pb[0]).hypot(pa[2] - pb[2]) < min
+                        || bodies_intersect(dancers[a], dancers[b], t, radii)
+                })
+            })
+        })
+        .count();
+    Ok(Some(hits as f64 / frames as f64))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,7 +2,9 @@
 //! dancers' world positions (GCD works on the scene as placed; its frame time is fixed at 1/30).
 
 use anyhow::{Context, Result};
-use dancegen_metrics::group::{CapsuleRadii, gmc, group_kinetic_features, tif};
+use dancegen_metrics::group::{
+    CapsuleRadii, collision_share, gmc, group_kinetic_features, min_root_distance, tif,
+};
 
 use super::input::Clip;
 
@@ -27,6 +29,8 @@ pub fn clip_metric(m: &str, c: &Clip) -> Result<Option<f64>> {
     let v = match m {
         "gmc" => gmc(&dancers),
         "tif" => tif(&dancers, &CapsuleRadii::default()),
+        "collision" => collision_share(&dancers, &CapsuleRadii::default()),
+        "min_distance" => min_root_distance(&dancers),
         other => unreachable!("group metric {other}"),
     };
     v.with_context(|| format!("{}: {m}", c.path.display()))

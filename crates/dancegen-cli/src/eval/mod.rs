@@ -49,7 +49,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 22] = [
+const METRICS: [&str; 24] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -63,6 +63,8 @@ const METRICS: [&str; 22] = [
     "gmr",
     "gmc",
     "tif",
+    "collision",
+    "min_distance",
     "fid_cd",
     "div_cd",
     "bed",
@@ -75,7 +77,7 @@ const METRICS: [&str; 22] = [
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 14] = [
+const PER_CLIP: [&str; 16] = [
     "bas",
     "pfc",
     "fsr",
@@ -87,6 +89,8 @@ const PER_CLIP: [&str; 14] = [
     "boundary_jerk",
     "gmc",
     "tif",
+    "collision",
+    "min_distance",
     "bed",
     "ipr",
     "contact_range",
@@ -113,7 +117,9 @@ impl Offer {
             "gmr" if !(self.pred_groups && self.gt_groups) => {
                 Err("needs group scenes (N, T, 24, 3) in both --pred and --gt")
             }
-            "gmc" | "tif" if !self.pred_groups => Err("needs group scenes (N, T, 24, 3) in --pred"),
+            "gmc" | "tif" | "collision" | "min_distance" if !self.pred_groups => {
+                Err("needs group scenes (N, T, 24, 3) in --pred")
+            }
             "fid_cd" if !(self.pred_duets && self.gt_duets) => {
                 Err("needs duets in --pred and --gt (--leader / --gt-leader, or two-dancer clips)")
             }
@@ -304,7 +310,9 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
                     (d.percent(), false)
                 }
                 // Not a scene / not a duet: nothing to measure, nothing to warn about.
-                "gmc" | "tif" => (group::clip_metric(m, clip)?, !clip.is_group()),
+                "gmc" | "tif" | "collision" | "min_distance" => {
+                    (group::clip_metric(m, clip)?, !clip.is_group())
+                }
                 "bed" | "ipr" | "contact_range" => match pair {
                     Some(p) => (duet::clip_metric(m, clip, p)?, false),
                     None => (None, true),

@@ -10,7 +10,8 @@
 //!   couples.
 //! - **Formation** ([`plan`]): a template (line, column, V, …, cluster) with spacing 0.9–1.8 m
 //!   (1.8–2.6 m between members when a couple is one of them), jitter and ±30° yaw; at 8-beat
-//!   phrase boundaries of the song, transitions of 2–4 beats on minimum-jerk paths: a morph to a
+//!   phrase boundaries of the song, transitions of 2–4 beats (stretched up to 8 so no path is
+//!   faster than 2 m/s) on minimum-jerk paths: a morph to a
 //!   new template with Hungarian slot assignment, or a swap of two neighbours with a lateral
 //!   offset or an upstage pass.
 //! - **Timing**: unison (one segment for every solo member, ±2 frames of jitter, each member

@@ -19,6 +19,16 @@ const TRANSITION_CHANCE: f64 = 0.6;
 const SWAP_CHANCE: f64 = 0.35;
 /// Largest translation of the whole formation in a morph (metres; our choice).
 const MAX_SHIFT_M: f64 = 0.5;
+/// Fastest a planned path may go (metres per second, at the minimum-jerk peak, 1.875 × the
+/// mean speed): a brisk dancing walk. A transition that would be faster in 2–4 beats is
+/// stretched to up to [`MAX_TRANSITION_BEATS`] or dropped. Our choice.
+const MAX_PATH_SPEED_M_S: f64 = 2.0;
+/// Longest a stretched transition may last.
+const MAX_TRANSITION_BEATS: usize = 8;
+/// Peak speed of a minimum-jerk path over its mean speed.
+const MIN_JERK_PEAK: f64 = 1.875;
+/// Frames per second of the plan (the data set's).
+const PLAN_FPS: f64 = 30.0;
 
 /// The paths of a sample's members and what they were made of.
 #[derive(Clone, Debug)]
@@ -144,9 +154,31 @@ pub(crate) fn plan_formation(
         ) else {
             continue;
         };
+        // Stretch the transition so no path is faster than MAX_PATH_SPEED_M_S (a swap's bow
+        // makes its path longer than the straight line; the bound is checked on the result).
+        let far = current
+            .iter()
+            .zip(&target)
+            .map(|(a, b)| dancegen_motion::formation::distance(*a, *b))
+            .fold(0.0, f64::max);
+        let needed = (MIN_JERK_PEAK * far * PLAN_FPS / MAX_PATH_SPEED_M_S).ceil() as usize;
+        let len = len.max(needed);
+        if len as f64 > MAX_TRANSITION_BEATS as f64 * beat_frames || start + len > frames {
+            continue;
+        }
         let Ok(paths) = plan_transition(&current, &target, kind, len) else {
             continue;
         };
+        let step_max = paths
+            .iter()
+            .flat_map(|p| {
+                p.windows(2)
+                    .map(|w| dancegen_motion::formation::distance(w[0], w[1]))
+            })
+            .fold(0.0, f64::max);
+        if step_max * PLAN_FPS > 1.5 * MAX_PATH_SPEED_M_S {
+            continue;
+        }
         hold(&mut plan, &current, start, &mut t);
         for f in 0..len {
             for (d, p) in paths.iter().enumerate() {
@@ -244,10 +276,10 @@ mod tests {
                 let at: Vec<StagePos> = plan.paths.iter().map(|p| p[t]).collect();
                 assert!(!too_close(&at, 0.45), "seed {seed} frame {t}: {at:?}");
             }
-            // Paths are continuous: no jump above 0.1 m per frame.
+            // Paths are continuous and walkable: no step above 3 m/s.
             for p in &plan.paths {
                 for w in p.windows(2) {
-                    assert!(dancegen_motion::formation::distance(w[0], w[1]) < 0.1);
+                    assert!(dancegen_motion::formation::distance(w[0], w[1]) * PLAN_FPS <= 3.0);
                 }
             }
         }

@@ -33,6 +33,9 @@ use crate::systems::solo::keep_feet_above_floor;
 /// Shortest music a group dance is made for (one half window of the model, 2.5 s).
 pub const MIN_GROUP_SECONDS: f64 = 2.5;
 
+/// A song length no formation time exceeds: the check before the song is analysed.
+const ANY_SONG_SECONDS: f64 = 1e9;
+
 /// A formation file, read but not yet checked against the song.
 #[derive(Clone, Debug)]
 pub struct FormationFile {
@@ -138,9 +141,9 @@ impl DanceSystem for Group {
                 "--guidance {w}: use a non-negative number (1 = no guidance, 2 = the default)"
             )));
         }
-        // Everything but the times, which need the song's length.
+        // Everything but the times against the song's length (checked once it is known).
         if let Some(f) = &group.formation {
-            parse_formation(f, group.dancers, f64::INFINITY)?;
+            parse_formation(f, group.dancers, ANY_SONG_SECONDS)?;
         }
         Ok(())
     }
