@@ -1,0 +1,555 @@
+#!/usr/bin/env python3
+"""Group (TCDiff++) evaluation on the held-out group set; run by tools/group_eval.sh.
+
+Held-out material (never trained on): the song `feelings`, the formation families circle and
+diamond, and the salsa takes 13 and 14 plus modern 05_07 (`dancegen dataset build --pairing
+group ... --hold-out ... --hold-out-shape circle diamond`, configs/tcdiffpp_small.toml).
+
+For every selected held-out sample (N = 2, 3 and 5) and seed, each configuration dances the
+sample's song span; the controlled ones follow the sample's own trajectories as a formation
+file (a keyframe every second). Metrics:
+- from `dancegen eval`: collision share, smallest root distance, TIF, GMC per scene; per-dancer
+  FID_k / Div_k against the held-out *real* solo tracks, BAS against the clip's beats, PFC, FSR;
+  for N = 2, GMR / GMC / TIF against the held-out real salsa couples;
+- here: boundary jerk at the window joins and the largest root step within ±5 frames of a
+  join, trajectory error against the requested path and the share of dances whose final
+  left-to-right order is the requested one.
+
+Standard library only (3.11+). Subcommand-free: one run does everything, reusing finished
+generations in OUT.
+"""
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting helpers)
+    boundary_jerk_ratio,
+    fmt,
+    mean_joint_jerk,
+    read_npy,
+    stats,
+    write_npy,
+    write_report,
+)
+
+FPS = 30
+KEYFRAME_EVERY = 30  # frames between formation keyframes taken from a sample's trajectories
+MIN_SEPARATION_M = 0.45  # dancegen_motion::formation::MIN_SEPARATION_M
+JOIN_BAND = 5  # frames either side of a join searched for a root jump (group.md §4)
+LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placing B1
+HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
+HELD_SOLO = HELD_TAKES + ["05_07"]
+
+CONFIGS = [
+    ("full", "TCDiff++ (full system: LGDS, formation control, separation)"),
+    ("parallel", "parallel long-form sampler (`--sampler parallel`), formation control"),
+    ("free", "free dance (no formation; the model chooses)"),
+    ("b1", "B1: N independent solo dances (models/lodgepp-small) placed on the formation"),
+]
+ABLATIONS = [
+    ("w/o fusion projection", "fusion_projection = false"),
+    ("w/o footwork adaptor", "footwork = false"),
+    ("w/o positioning embedding", "positioning = false"),
+    ("w/o distance loss", "[model.loss] distance = 0"),
+]
+
+
+def log(msg):
+    print(f"[group-eval {time.strftime('%H:%M:%S', time.gmtime())}] {msg}", file=sys.stderr)
+
+
+def run(cmd):
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"failed: {' '.join(cmd)}\n{r.stderr}")
+    return r.stdout
+
+
+# ----------------------------------------------------------------------------- geometry
+
+
+def order_left_to_right(pos):
+    return sorted(range(len(pos)), key=lambda i: (pos[i][0], i))
+
+
+def gaussian(x, sigma):
+    r = int(3 * sigma)
+    w = [math.exp(-0.5 * (k / sigma) ** 2) for k in range(-r, r + 1)]
+    n = len(x)
+    out = []
+    for t in range(n):
+        s = ws = 0.0
+        for k in range(-r, r + 1):
+            i = min(max(t + k, 0), n - 1)  # ends held
+            s += w[k + r] * x[i]
+            ws += w[k + r]
+        out.append(s / ws)
+    return out
+
+
+def min_jerk(a, b, tau):
+    s = tau**3 * (10 - 15 * tau + 6 * tau * tau)
+    return [a[0] + (b[0] - a[0]) * s, a[1] + (b[1] - a[1]) * s]
+
+
+def requested_paths(formation, start_s, frames):
+    """[dancer][frame] of the formation (all dancers given at every keyframe here)."""
+    keys = formation["keyframes"]
+    n = len(keys[0]["positions"])
+    at = [round(k["t"] * FPS) for k in keys]
+    f0 = round(start_s * FPS)
+    out = [[None] * frames for _ in range(n)]
+    for d in range(n):
+        for w in range(len(keys) - 1):
+            fa, fb = at[w], at[w + 1]
+            for f in range(fa, fb + 1):
+                if 0 <= f - f0 < frames:
+                    tau = (f - fa) / (fb - fa) if fb > fa else 1.0
+                    out[d][f - f0] = min_jerk(keys[w]["positions"][d], keys[w + 1]["positions"][d], tau)
+    return out
+
+
+# ----------------------------------------------------------------------------- inputs
+
+
+def select_clips(dataset, per_n, out):
+    m = json.load(open(os.path.join(dataset, "manifest.json")))
+    chosen = {2: [], 3: [], 5: []}
+    for c in sorted(m["clips"], key=lambda c: c["name"]):
+        g = c.get("group")
+        if not c["motion"].startswith("held_out/") or not g or g["dancers"] not in chosen:
+            continue
+        if len(chosen[g["dancers"]]) >= per_n:
+            continue
+        shape, tr = read_npy(os.path.join(dataset, g["trajectories"]))
+        n, t = shape[0], shape[1]
+        frames = list(range(0, t, KEYFRAME_EVERY))
+        if frames[-1] != t - 1:
+            frames.append(t - 1)
+        keys = []
+        ok = True
+        for f in frames:
+            pos = [[tr[(d * t + f) * 2], tr[(d * t + f) * 2 + 1]] for d in range(n)]
+            for a in range(n):
+                for b in range(a + 1, n):
+                    if math.dist(pos[a], pos[b]) < MIN_SEPARATION_M + 0.01:
+                        ok = False
+            keys.append({"t": round(c["song_start_s"] + f / FPS, 6), "positions": pos})
+        if not ok:  # a real couple closer than the formation rule allows: not a valid request
+            continue
+        fpath = os.path.join(out, "formations", c["name"] + ".json")
+        os.makedirs(os.path.dirname(fpath), exist_ok=True)
+        json.dump({"keyframes": keys}, open(fpath, "w"))
+        chosen[g["dancers"]].append({
+            "name": c["name"], "dancers": n, "frames": t, "song": c["source_song"],
+            "start": c["song_start_s"], "end": c["song_start_s"] + t / FPS,
+            "formation": fpath, "music": os.path.join(dataset, c["music"]),
+            "shapes": g["shapes"], "timing": g["timing"],
+        })
+    return [c for n in (2, 3, 5) for c in chosen[n]]
+
+
+def windows(n_frames, length, stride):
+    return list(range(0, n_frames - length + 1, stride))
+
+
+def real_references(binary, data, out):
+    """Held-out real solo tracks cut into 300-frame clips, and the real couples 13 and 14 as
+    (2, 300, 24, 3) scenes."""
+    solo_dir = os.path.join(out, "real", "solo")
+    couple_dir = os.path.join(out, "real", "couples")
+    os.makedirs(solo_dir, exist_ok=True)
+    os.makedirs(couple_dir, exist_ok=True)
+    full = {}
+    for stem in HELD_SOLO:
+        src = os.path.join(data, "cmu-salsa", stem + ".bvh")
+        if not os.path.exists(src):
+            src = os.path.join(data, "cmu-dance", "modern", stem + ".bvh")
+        dst = os.path.join(out, "real", stem + ".npy")
+        if not os.path.exists(dst):
+            run([binary, "convert", src, "--to", "smpl24", "--fps", "30", "-o", dst, "-q"])
+        shape, a = read_npy(dst)
+        full[stem] = (shape[0], a)
+        for s in windows(shape[0], 300, 150):
+            p = os.path.join(solo_dir, f"{stem}_{s:05d}.npy")
+            if not os.path.exists(p):
+                write_npy(p, a[s * 72:(s + 300) * 72], shape=(300, 24, 3))
+    for take in ("13", "14"):
+        (ta, a), (tb, b) = full[f"60_{take}_scaled"], full[f"61_{take}_scaled"]
+        for s in windows(min(ta, tb), 300, 150):
+            p = os.path.join(couple_dir, f"couple_{take}_{s:05d}.npy")
+            if not os.path.exists(p):
+                write_npy(p, list(a[s * 72:(s + 300) * 72]) + list(b[s * 72:(s + 300) * 72]),
+                          shape=(2, 300, 24, 3))
+    return solo_dir, couple_dir
+
+
+# ----------------------------------------------------------------------------- generation
+
+
+def generate(binary, cfg, clip, seed, model, solo_model, out, steps):
+    d = os.path.join(out, "gen", cfg, f"seed{seed}")
+    os.makedirs(d, exist_ok=True)
+    scene = os.path.join(d, clip["name"] + ".npy")
+    meta = os.path.join(d, clip["name"] + ".json")
+    if os.path.exists(scene) and os.path.exists(meta):
+        return scene, meta
+    base = ["--start", f"{clip['start']:.4f}", "--end", f"{clip['end']:.4f}", "--seed", str(seed),
+            "--progress", "none", "-q"]
+    if steps:
+        base += ["--steps", str(steps)]
+    t0 = time.time()
+    if cfg == "b1":
+        n = clip["dancers"]
+        formation = json.load(open(clip["formation"]))
+        want = requested_paths(formation, clip["start"], clip["frames"])
+        dancers = []
+        for k in range(n):
+            p = os.path.join(d, f"{clip['name']}_solo{k}.npy")
+            if not os.path.exists(p):
+                run([binary, "generate", clip["song"], "--system", "solo", "--model", solo_model,
+                     "-o", p] + base[:4] + ["--seed", str(seed * 10 + k)] + base[6:])
+            shape, a = read_npy(p)
+            t = min(shape[0], clip["frames"])
+            x = gaussian([a[f * 72] for f in range(t)], LOW_PASS_SIGMA)
+            z = gaussian([a[f * 72 + 2] for f in range(t)], LOW_PASS_SIGMA)
+            placed = []
+            for f in range(t):
+                w = want[k][f] or want[k][f - 1]
+                dx, dz = w[0] - x[f], w[1] - z[f]
+                fr = list(a[f * 72:(f + 1) * 72])
+                for j in range(24):
+                    fr[3 * j] += dx
+                    fr[3 * j + 2] += dz
+                placed.extend(fr)
+            dancers.append((t, placed))
+        t = min(x[0] for x in dancers)
+        flat = []
+        for _, p in dancers:
+            flat.extend(p[:t * 72])
+        write_npy(scene, flat, shape=(n, t, 24, 3))
+        traj = [[[p[f * 72], p[f * 72 + 2]] for f in range(t)] for _, p in dancers]
+        errs, finals = [], []
+        for tr, wt in zip(traj, want):
+            e = [math.dist(tr[f], wt[f]) for f in range(t) if wt[f] is not None]
+            errs += e
+            finals.append(e[-1])
+        json.dump({
+            "start_order": order_left_to_right([tr[0] for tr in traj]),
+            "end_order": order_left_to_right([tr[-1] for tr in traj]),
+            "trajectory_error_mean_m": statistics.fmean(errs),
+            "trajectory_error_final_m": statistics.fmean(finals),
+            "seconds": time.time() - t0,
+        }, open(meta, "w"))
+        return scene, meta
+    cmd = [binary, "generate", clip["song"], "--system", "group", "--dancers",
+           str(clip["dancers"]), "--model", model, "-o", scene, "-o", meta] + base
+    if cfg in ("full", "parallel"):
+        cmd += ["--formation", clip["formation"]]
+    if cfg == "parallel":
+        cmd += ["--sampler", "parallel"]
+    run(cmd)
+    m = json.load(open(meta))
+    slim = {k: m.get(k) for k in ("start_order", "end_order", "trajectory_error_mean_m",
+                                  "trajectory_error_final_m")}
+    slim["seconds"] = time.time() - t0
+    json.dump(slim, open(meta, "w"))  # the joints are in the .npy already
+    return scene, meta
+
+
+def split(scene, d):
+    shape, a = read_npy(scene)
+    n, t = shape[0], shape[1]
+    os.makedirs(d, exist_ok=True)
+    out = []
+    for k in range(n):
+        p = os.path.join(d, f"{os.path.basename(scene)[:-4]}_d{k}.npy")
+        write_npy(p, a[k * t * 72:(k + 1) * t * 72], shape=(t, 24, 3))
+        out.append(p)
+    return out
+
+
+def joins(frames, window=150):
+    """LGDS / parallel: window w covers [w·W/2, w·W/2 + W); new frames begin at W, 3W/2, ..."""
+    return list(range(window, frames, window // 2))
+
+
+def scene_motion_stats(scene):
+    shape, a = read_npy(scene)
+    n, t = shape[0], shape[1]
+    jerks, jumps = [], []
+    for k in range(n):
+        p = a[k * t * 72:(k + 1) * t * 72]
+        jerks.append(boundary_jerk_ratio(mean_joint_jerk(p, t), joins(t)))
+        for b in joins(t):
+            for f in range(max(b - JOIN_BAND, 1), min(b + JOIN_BAND, t - 1) + 1):
+                jumps.append(math.dist((p[f * 72], p[f * 72 + 2]), (p[(f - 1) * 72], p[(f - 1) * 72 + 2])))
+    return [j for j in jerks if j is not None], (max(jumps) if jumps else None)
+
+
+def evaluate(binary, args, clips, out):
+    solo_gt, couples_gt = real_references(binary, args.data, out)
+    results = {}
+    for cfg, _ in CONFIGS:
+        for seed in args.seeds:
+            log(f"{cfg} seed {seed}")
+            scenes, dancers, metas, bas = [], [], [], []
+            for c in clips:
+                scene, meta = generate(binary, cfg, c, seed, args.model, args.solo_model, out,
+                                       args.steps)
+                scenes.append((c, scene))
+                metas.append((c, json.load(open(meta))))
+                parts = split(scene, os.path.join(out, "split", cfg, f"seed{seed}"))
+                dancers += parts
+                j = os.path.join(out, "split", cfg, f"seed{seed}", c["name"] + "_bas.json")
+                run([binary, "eval", "--fps", "30", "--pred"] + parts +
+                    ["--beats", c["music"], "--metrics", "bas", "--json", j, "-q"])
+                bas.append(json.load(open(j)).get("bas"))
+            ej = os.path.join(out, "eval", f"{cfg}_seed{seed}_dancers.json")
+            sj = os.path.join(out, "eval", f"{cfg}_seed{seed}_scenes.json")
+            os.makedirs(os.path.dirname(ej), exist_ok=True)
+            run([binary, "eval", "--fps", "30", "--pred"] + dancers + ["--gt", solo_gt,
+                 "--metrics", "fid_k,div_k,pfc,fsr", "--json", ej, "-q"])
+            run([binary, "eval", "--fps", "30", "--pred"] + [s for _, s in scenes] +
+                ["--metrics", "gmc,tif,collision,min_distance", "--json", sj, "-q"])
+            n2 = [s for c, s in scenes if c["dancers"] == 2]
+            cj = os.path.join(out, "eval", f"{cfg}_seed{seed}_couples.json")
+            if n2:
+                run([binary, "eval", "--fps", "30", "--pred"] + n2 + ["--gt", couples_gt,
+                     "--metrics", "gmr,gmc,tif", "--json", cj, "-q"])
+            jerk, jump = [], []
+            for c, s in scenes:
+                bj, rj = scene_motion_stats(s)
+                jerk += bj
+                if rj is not None:
+                    jump.append(rj)
+            results[(cfg, seed)] = {
+                "dancers": json.load(open(ej)),
+                "scenes": json.load(open(sj)),
+                "couples": json.load(open(cj)) if n2 else None,
+                "bas": [b for b in bas if b is not None],
+                "jerk": jerk,
+                "jump": jump,
+                "metas": metas,
+            }
+    rj = os.path.join(out, "eval", "real_couples.json")
+    run([binary, "eval", "--fps", "30", "--pred", couples_gt, "--gt", couples_gt,
+         "--metrics", "gmc,tif,collision,min_distance", "--json", rj, "-q"])
+    rs = os.path.join(out, "eval", "real_solo.json")
+    run([binary, "eval", "--fps", "30", "--pred", solo_gt, "--gt", solo_gt, "--metrics",
+         "div_k,pfc,fsr",
+         "--json", rs, "-q"])
+    return results, json.load(open(rj)), json.load(open(rs))
+
+
+# ----------------------------------------------------------------------------- report
+
+
+def per_seed(results, cfg, seeds, f):
+    return [f(results[(cfg, s)]) for s in seeds]
+
+
+def mean_or_none(v):
+    v = [x for x in v if x is not None]
+    return statistics.fmean(v) if v else None
+
+
+def end_order_ok(clips, r):
+    ok = []
+    for c, m in r["metas"]:
+        f = json.load(open(c["formation"]))
+        last = f["keyframes"][-1]["positions"]
+        ok.append(1.0 if m.get("end_order") == order_left_to_right(last) else 0.0)
+    return mean_or_none(ok)
+
+
+def report(args, clips, results, real_couples, real_solo, started, load_note):
+    seeds = args.seeds
+    L = []
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain"], capture_output=True,
+                           text=True).stdout.strip()
+    L.append("# Group evaluation (TCDiff++) on the held-out group set")
+    L.append("")
+    L.append(f"Generated by `bash tools/group_eval.sh` on {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+             f"(commit `{commit}`{', with uncommitted changes' if dirty else ''}); model "
+             f"`{os.path.relpath(args.model)}`; machine: 2 cores, {load_note}; wall time "
+             f"{(time.time() - started) / 60:.0f} min.")
+    L.append("")
+    L.append("**Everything here is measured on held-out material the model never saw**: the song "
+             "`feelings`, the formation families circle and diamond, and the held-out takes "
+             "(salsa 13 and 14, modern 05_07). The group data are *composed* from real solo and "
+             "couple motion (`dancegen dataset build --pairing group`, "
+             "crates/dancegen-dataset/src/group/); there is no recorded group dance here, so "
+             "nothing below is compared with the TCDiff++ paper's numbers.")
+    L.append("")
+    names = ", ".join(f"{c['name']} ({'/'.join(c['shapes'])}, {c['timing']})" for c in clips)
+    L.append(f"Clips ({len(clips)}, 10 s each, N = 2, 3 and 5): {names}. Seeds: "
+             f"{' '.join(map(str, seeds))}. The controlled configurations get each clip's own "
+             f"root trajectories as a FORMATION.json (a keyframe every {KEYFRAME_EVERY} frames, "
+             "minimum-jerk between), and are measured against the requested path those "
+             "keyframes give.")
+    L.append("")
+    L.append("| configuration | collision % ↓ | min distance m | TIF % ↓ | GMC | FID_k ↓ | Div_k | "
+             "BAS ↑ | PFC ↓ | FSR ↓ | boundary jerk ↓ | max root step near a join m ↓ | "
+             "trajectory error mean / final m ↓ | end order as requested % |")
+    L.append("|" + "---|" * 14)
+
+    def col(cfg, f, digits, scale=1.0):
+        m, s, _ = stats(per_seed(results, cfg, seeds, f))
+        return fmt(m, s, digits, scale)
+
+    for cfg, label in CONFIGS:
+        if (cfg, seeds[0]) not in results:
+            continue
+        sc = lambda r, k: r["scenes"].get(k)  # noqa: E731
+        mind = col(cfg, lambda r: min(x["min_distance"] for x in r["scenes"]["per_clip"]), 2)
+        traj = "n/a"
+        order = "n/a"
+        if cfg != "free":
+            tm = col(cfg, lambda r: mean_or_none([m.get("trajectory_error_mean_m") for _, m in r["metas"]]), 3)
+            tf = col(cfg, lambda r: mean_or_none([m.get("trajectory_error_final_m") for _, m in r["metas"]]), 3)
+            traj = f"{tm} / {tf}"
+            order = col(cfg, lambda r: end_order_ok(clips, r), 0, 100.0)
+        jerk = "n/a (solo seams)" if cfg == "b1" else col(cfg, lambda r: mean_or_none(r["jerk"]), 3)
+        L.append("| " + " | ".join([
+            label,
+            col(cfg, lambda r: sc(r, "collision"), 2, 100.0),
+            mind,
+            col(cfg, lambda r: sc(r, "tif"), 2, 100.0),
+            col(cfg, lambda r: sc(r, "gmc"), 1),
+            col(cfg, lambda r: r["dancers"].get("fid_k"), 1),
+            col(cfg, lambda r: r["dancers"].get("div_k"), 2),
+            col(cfg, lambda r: mean_or_none(r["bas"]), 3),
+            col(cfg, lambda r: r["dancers"].get("pfc"), 3),
+            col(cfg, lambda r: r["dancers"].get("fsr"), 3),
+            jerk,
+            col(cfg, lambda r: max(r["jump"]) if r["jump"] else None, 3),
+            traj,
+            order,
+        ]) + " |")
+    L.append(f"| real held-out solo tracks / couples (reference) | "
+             f"{fmt(real_couples.get('collision'), None, 2, 100.0)} (couples) | "
+             f"{fmt(min(x['min_distance'] for x in real_couples['per_clip']), None, 2)} (partners) | "
+             f"{fmt(real_couples.get('tif'), None, 2, 100.0)} (couples) | "
+             f"{fmt(real_couples.get('gmc'), None, 1)} | n/a | {fmt(real_solo.get('div_k'), None, 2)} | "
+             f"n/a | {fmt(real_solo.get('pfc'), None, 3)} | {fmt(real_solo.get('fsr'), None, 3)} | "
+             "n/a | n/a | n/a | n/a |")
+    L.append("")
+    L.append("Mean ± standard deviation over the seeds (n − 1). Collision % = share of frames in "
+             f"which two dancers' roots are closer than {MIN_SEPARATION_M} m or their capsule "
+             "bodies intersect (`dancegen eval` `collision`); TIF % counts only the capsule "
+             "intersections (our definition; never compare it with the paper's). Min distance: "
+             "the smallest root distance of any scene of the seed. FID_k / Div_k: every "
+             "generated dancer as one clip against the held-out real solo tracks cut into 10 s "
+             "clips. BAS: Bailando's, each dancer against its clip's beats. PFC as `dancegen eval` reports it (EDGE × 10⁴). Boundary "
+             "jerk: mean joint jerk in the band before each window join over the rest "
+             "(`dancegen_metrics::longform`'s band; joins at frames 150, 225, …). Real couples are partners, so their distances and "
+             "intersections are contact, not collisions.")
+    L.append("")
+    # N = 2 against the real couples
+    L.append("## N = 2 against the held-out real salsa couples (takes 13 and 14, 10 s windows)")
+    L.append("")
+    L.append("| configuration | GMR ↓ | GMC | TIF % |")
+    L.append("|---|---|---|---|")
+    for cfg, label in CONFIGS:
+        if (cfg, seeds[0]) not in results or results[(cfg, seeds[0])]["couples"] is None:
+            continue
+        c = lambda f: fmt(*stats(per_seed(results, cfg, seeds, f))[:2], 2)  # noqa: E731
+        L.append(f"| {label} | {c(lambda r: r['couples'].get('gmr'))} | "
+                 f"{c(lambda r: r['couples'].get('gmc'))} | "
+                 f"{fmt(*stats(per_seed(results, cfg, seeds, lambda r: r['couples'].get('tif')))[:2], 2, 100.0)} |")
+    L.append(f"| real couples | 0 (itself) | {fmt(real_couples.get('gmc'), None, 2)} | "
+             f"{fmt(real_couples.get('tif'), None, 2, 100.0)} |")
+    L.append("")
+    # by N
+    L.append("## Collisions and control by group size (full system)")
+    L.append("")
+    L.append("| N | collision % | trajectory error mean m | end order as requested % |")
+    L.append("|---|---|---|---|")
+    for n in (2, 3, 5):
+        idx = [i for i, c in enumerate(clips) if c["dancers"] == n]
+        if not idx or ("full", seeds[0]) not in results:
+            continue
+        col_n = lambda r: mean_or_none([r["scenes"]["per_clip"][i]["collision"] for i in idx])  # noqa: E731
+        tr_n = lambda r: mean_or_none([r["metas"][i][1].get("trajectory_error_mean_m") for i in idx])  # noqa: E731
+
+        def ord_n(r):
+            sub = {"metas": [r["metas"][i] for i in idx]}
+            return end_order_ok([clips[i] for i in idx], sub)
+        m = lambda f, d, s=1.0: fmt(*stats(per_seed(results, "full", seeds, f))[:2], d, s)  # noqa: E731
+        L.append(f"| {n} | {m(col_n, 2, 100.0)} | {m(tr_n, 3)} | {m(ord_n, 0, 100.0)} |")
+    L.append("")
+    L.append("## Ablations not run")
+    L.append("")
+    L.append("Each needs its own training run of the same budget (about an hour here); none was "
+             "trained yet, so these rows are missing rather than estimated:")
+    L.append("")
+    for name, switch in ABLATIONS:
+        L.append(f"- {name} (`{switch}` in configs/tcdiffpp_small.toml)")
+    L.append("")
+    # targets
+    L.append("## Targets (issue #17)")
+    L.append("")
+    g = lambda cfg, f: stats(per_seed(results, cfg, seeds, f))[0] if (cfg, seeds[0]) in results else None  # noqa: E731
+    coll = g("full", lambda r: r["scenes"].get("collision"))
+    coll_b1 = g("b1", lambda r: r["scenes"].get("collision"))
+    tr = g("full", lambda r: mean_or_none([m.get("trajectory_error_mean_m") for _, m in r["metas"]]))
+    jump = g("full", lambda r: max(r["jump"]) if r["jump"] else None)
+    jerk = g("full", lambda r: mean_or_none(r["jerk"]))
+    fid = g("full", lambda r: r["dancers"].get("fid_k"))
+    fid_b1 = g("b1", lambda r: r["dancers"].get("fid_k"))
+
+    def verdict(ok):
+        return "n/a" if ok is None else ("met" if ok else "**not met**")
+
+    rows = [
+        ("collisions in < 1 % of frames", coll, coll is not None and coll < 0.01, 100.0),
+        ("fewer collisions than B1", coll, None if coll_b1 is None or coll is None else coll < coll_b1, 100.0),
+        ("trajectory error < 0.15 m mean", tr, tr is not None and tr < 0.15, 1.0),
+        ("no root step > 0.25 m per frame near a join", jump, jump is not None and jump <= 0.25, 1.0),
+        ("boundary jerk < 1.5", jerk, jerk is not None and jerk < 1.5, 1.0),
+        ("per-dancer FID_k ≤ B1's + 10 %", fid, None if fid is None or fid_b1 is None else fid <= 1.1 * fid_b1, 1.0),
+    ]
+    L.append("| target | full system | verdict |")
+    L.append("|---|---|---|")
+    for name, v, ok, scale in rows:
+        L.append(f"| {name} | {fmt(v, None, 3, scale)} | {verdict(ok)} |")
+    L.append("")
+    write_report(args.report, L)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--bin", required=True)
+    ap.add_argument("--dataset", required=True)
+    ap.add_argument("--data", required=True, help="../shared/data")
+    ap.add_argument("--model", required=True)
+    ap.add_argument("--solo-model", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--report", required=True)
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--per-n", type=int, default=4)
+    ap.add_argument("--steps", type=int, default=None)
+    ap.add_argument("--load-note", default="")
+    args = ap.parse_args()
+    started = time.time()
+    os.makedirs(args.out, exist_ok=True)
+    clips = select_clips(args.dataset, args.per_n, args.out)
+    if not clips:
+        raise SystemExit(f"{args.dataset}: no held-out group clips with N = 2, 3 or 5")
+    log(f"{len(clips)} clips: {' '.join(c['name'] for c in clips)}")
+    results, real_couples, real_solo = evaluate(args.bin, args, clips, args.out)
+    report(args, clips, results, real_couples, real_solo, started, args.load_note)
+
+
+if __name__ == "__main__":
+    main()

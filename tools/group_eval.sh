@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Group (TCDiff++) evaluation on the held-out group set: for held-out samples with N = 2, 3 and
+# 5 dancers and 3 seeds, dances the sample's song span with the full system (formation control
+# from the sample's own trajectories), the parallel sampler, a free dance and baseline B1 (N
+# solo dances placed on the formation); measures them with `dancegen eval` and
+# tools/group_eval.py, and writes docs/group-eval.md.
+#
+#   bash tools/group_eval.sh
+#
+# Environment (all optional):
+#   SEEDS="0 1 2"   PER_N=4 (clips per group size)   STEPS=N (default: the model's)
+#   MODEL=models/tcdiffpp-small   SOLO_MODEL=models/lodgepp-small
+#   DATASET=target/datasets/group (configs/tcdiffpp_small.toml says how it is built)
+#   DANCEGEN=target/release/dancegen (snapshotted into $OUT/bin)
+#   OUT=target/group-eval (finished generations are reused; delete it to start over)
+#   REPORT=docs/group-eval.md   PYTHON=python3 (3.11+, standard library only)
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$ROOT"
+# shellcheck source=tools/eval_lib.sh
+source "$ROOT/tools/eval_lib.sh"
+parse_eval_args "$0" "$@"
+[ "$DRY" = 1 ] && { echo "--dry-run is not offered by the group evaluation" >&2; exit 2; }
+
+SEEDS=${SEEDS:-"0 1 2"}
+PER_N=${PER_N:-4}
+MODEL=${MODEL:-$ROOT/models/tcdiffpp-small}
+SOLO_MODEL=${SOLO_MODEL:-$ROOT/models/lodgepp-small}
+DATASET=${DATASET:-$ROOT/target/datasets/group}
+OUT=${OUT:-$ROOT/target/group-eval}
+REPORT=${REPORT:-$ROOT/docs/group-eval.md}
+PYTHON=${PYTHON:-python3}
+LOAD_NOTE=$(load_note)
+[ -f "$DATASET/manifest.json" ] || { echo "$DATASET/manifest.json missing: build the group data set (configs/tcdiffpp_small.toml)" >&2; exit 1; }
+mkdir -p "$OUT"
+snapshot_binary "${DANCEGEN:-$ROOT/target/release/dancegen}" "$OUT"
+# shellcheck disable=SC2086
+"$PYTHON" "$ROOT/tools/group_eval.py" --bin "$BIN" --dataset "$DATASET" \
+    --data "$ROOT/../shared/data" --model "$MODEL" --solo-model "$SOLO_MODEL" --out "$OUT" \
+    --report "$REPORT" --seeds $SEEDS --per-n "$PER_N" ${STEPS:+--steps "$STEPS"} \
+    --load-note "$LOAD_NOTE"
