@@ -98,15 +98,14 @@ fn composed_groups_are_labelled_apart_and_held_out_cleanly() {
         // Non-partners never come closer than 0.45 m; partners are a recorded couple.
         for a in 0..g.dancers {
             for b in a + 1..g.dancers {
-                let partners = g.partners.iter().any(|p| *p == [a, b]);
+                let partners = g.partners.contains(&[a, b]);
                 if partners {
                     let key = |s: &str| s.split_once('_').unwrap().1.to_string();
                     assert_eq!(key(&g.sources[a]), key(&g.sources[b]));
                     continue;
                 }
-                for t in 0..c.frames {
-                    let d =
-                        (roots[a][t][0] - roots[b][t][0]).hypot(roots[a][t][1] - roots[b][t][1]);
+                for (t, (pa, pb)) in roots[a].iter().zip(&roots[b]).enumerate() {
+                    let d = (pa[0] - pb[0]).hypot(pa[1] - pb[1]);
                     assert!(
                         d >= 0.45,
                         "{} frame {t}: dancers {a} and {b} {d:.3} m apart",

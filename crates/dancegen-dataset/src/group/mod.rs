@@ -172,7 +172,13 @@ struct Scene {
     warp: WarpReport,
 }
 
-fn load_sources(opts: &BuildOptions) -> Result<(Vec<Source>, Vec<(usize, usize)>), DatasetError> {
+/// Source indices of a couple's two partners.
+type CouplePair = (usize, usize);
+
+/// One sample's outcome and the reasons of its rejected tries.
+type SampleResult = (Result<Option<ClipEntry>, DatasetError>, Vec<Reject>);
+
+fn load_sources(opts: &BuildOptions) -> Result<(Vec<Source>, Vec<CouplePair>), DatasetError> {
     let files = expand_motion_inputs(&opts.motions)?;
     let mut units: Vec<MotionUnit> = Vec::new();
     let mut pairs: Vec<(usize, usize)> = Vec::new();
@@ -267,7 +273,7 @@ pub(crate) fn build_group(
     }
     check_hold_out(&opts.hold_out, &known)?;
     let songs = analyse_songs(&opts.music, progress)?;
-    let song_held = |s: &Song| opts.hold_out.iter().any(|h| *h == s.name);
+    let song_held = |s: &Song| opts.hold_out.contains(&s.name);
     let pool = |held: bool| -> Pool {
         let solos: Vec<usize> = (0..sources.len())
             .filter(|&i| sources[i].held == held)
@@ -324,7 +330,7 @@ pub(crate) fn build_group(
     }
     crate::create_dirs(&opts.out)?;
     progress.stage("composing groups", jobs.len());
-    let results: Vec<(Result<Option<ClipEntry>, DatasetError>, Vec<Reject>)> = jobs
+    let results: Vec<SampleResult> = jobs
         .par_iter()
         .map(|&(i, is_held)| {
             let p = if is_held { &held } else { &train };
@@ -609,7 +615,7 @@ fn compose(
     let mut unplaced_skating = Vec::new();
     for k in 0..m {
         let (seg, jit) = chosen[k].expect("chosen");
-        if !warped.contains_key(&seg) {
+        if let std::collections::hash_map::Entry::Vacant(slot) = warped.entry(seg) {
             let r = seg.start..seg.start + span;
             let a = slice(&sources[seg.source].unit.motion, r.clone());
             let ja =
@@ -645,7 +651,7 @@ fn compose(
                 bas_before: None,
                 bas_after: None,
             };
-            warped.insert(seg, (out, report));
+            slot.insert((out, report));
         }
         let (parts, report) = &warped[&seg];
         warp_total.min_rate = warp_total.min_rate.min(report.min_rate);

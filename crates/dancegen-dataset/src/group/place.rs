@@ -63,8 +63,11 @@ pub(crate) fn yawed(m: &SmplMotion, angle: f64) -> SmplMotion {
     for f in 0..frames {
         let root = Mat3::from_axis_angle(m.joint_aa(f, 0).map(f64::from));
         let aa = r.mul(&root).to_axis_angle();
-        for k in 0..3 {
-            out.poses[f * pose_dims + k] = aa[k] as f32;
+        for (dst, v) in out.poses[f * pose_dims..f * pose_dims + 3]
+            .iter_mut()
+            .zip(aa)
+        {
+            *dst = v as f32;
         }
         let p = &mut out.trans[f * 3..f * 3 + 3];
         let xz = rotate_xz([f64::from(p[0]), f64::from(p[2])], angle);

@@ -91,6 +91,7 @@ fn too_close(slots: &[StagePos], min: f64) -> bool {
 /// `phrase_starts` (frames) maybe a transition of 2–4 beats (`beat_frames` frames per beat).
 /// `min_gap` is the smallest slot distance accepted. `None` if no valid first template was
 /// found.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_formation(
     rng: &mut SplitMix64,
     m: usize,
