@@ -48,9 +48,9 @@ HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
 HELD_SOLO = HELD_TAKES + ["05_07"]
 
 CONFIGS = [
-    ("full", "TCDiff++ (full system: LGDS, formation control, separation)"),
-    ("parallel", "parallel long-form sampler (`--sampler parallel`), formation control"),
-    ("free", "free dance (no formation; the model chooses)"),
+    ("full", "TCDiff++ (full system: LGDS `--sampler lgds`, formation control, separation)"),
+    ("parallel", "parallel long-form sampler (`--sampler parallel`, the default), formation control"),
+    ("free", "free dance (no formation; the model chooses; the model's default sampler)"),
     ("b1", "B1: N independent solo dances (models/lodgepp-small) placed on the formation"),
 ]
 ABLATIONS = [
@@ -255,6 +255,8 @@ def generate(binary, cfg, clip, seed, model, solo_model, out, steps):
         cmd += ["--formation", clip["formation"]]
     if cfg == "parallel":
         cmd += ["--sampler", "parallel"]
+    if cfg == "full":
+        cmd += ["--sampler", "lgds"]
     run(cmd)
     m = json.load(open(meta))
     slim = {k: m.get(k) for k in ("start_order", "end_order", "trajectory_error_mean_m",

@@ -192,11 +192,21 @@ impl DanceSystem for Group {
             c
         });
         let sampling = &model.config.model.sampling;
+        let partial = requested
+            .as_ref()
+            .is_some_and(|r| r.iter().any(|track| track.iter().any(Option::is_none)));
         let sample = GroupSampleOptions {
             steps: common.steps.unwrap_or(sampling.steps),
             eta: sampling.eta,
             guidance: common.guidance.unwrap_or(sampling.guidance),
-            sampler: opts.sampler.unwrap_or(sampling.sampler),
+            sampler: opts.sampler.unwrap_or(if partial {
+                // The parallel sampler drops control in windows whose first frame does not
+                // give every dancer (it cannot place them; `dancegen_tcdiffpp::sampler`), so a
+                // formation with free dancers is sampled window by window.
+                LongSampler::Lgds
+            } else {
+                sampling.sampler
+            }),
             prefix: sampling.prefix,
             seed: common.seed,
         };
