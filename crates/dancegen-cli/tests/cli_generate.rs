@@ -305,10 +305,26 @@ fn json_progress_grows_to_one_on_stderr() {
 
 #[test]
 fn systems_are_chosen_by_name_with_clear_errors() {
-    let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "group"]);
+    // Not shipped yet: says so and lists the ones that are.
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--end",
+        "3",
+        "--system",
+        "holistic",
+    ]);
     assert!(!o.status.success());
     let e = stderr(&o);
-    assert!(e.contains("group") && e.contains("solo, duet"), "{e}");
+    assert!(
+        e.contains("holistic") && e.contains("solo, duet, group"),
+        "{e}"
+    );
+    // Shipped, but a group needs its size.
+    let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "group"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--dancers"), "{}", stderr(&o));
     let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "polka"]);
     assert!(!o.status.success());
     let e = stderr(&o);
