@@ -6,6 +6,7 @@ use crate::data::representation_dims;
 use crate::trainer::{self, RunOptions, RunSummary};
 use crate::{TrainConfig, TrainError, files};
 
+pub mod bundle_files;
 pub mod lodgepp;
 pub mod motion_autoencoder;
 pub mod reactdance;

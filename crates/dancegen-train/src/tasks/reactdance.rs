@@ -246,18 +246,7 @@ pub fn assemble_duet_bundle(
         path: p.to_path_buf(),
         reason,
     };
-    let mp = ldm_run.join(files::MODEL_TOML);
-    let text = std::fs::read_to_string(&mp).map_err(|e| crate::TrainError::io(&mp, e))?;
-    let t: toml::Table = toml::from_str(&text).map_err(|e| err(&mp, e.to_string()))?;
-    if t.get("kind").and_then(|k| k.as_str()) != Some(LDM) {
-        return Err(err(&mp, format!("not a finished {LDM} run")));
-    }
-    let table: LdmTable = t
-        .get("config")
-        .cloned()
-        .ok_or_else(|| err(&mp, "no [config]".into()))?
-        .try_into()
-        .map_err(|e: toml::de::Error| err(&mp, e.message().to_string()))?;
+    let table: LdmTable = super::bundle_files::finished_run_config(ldm_run, LDM)?;
     let dev = device::inference();
     let (ae_cfg, ae) = load_hfsq(hfsq_run, &dev).map_err(|r| err(hfsq_run, r))?;
     if ae_cfg != table.autoencoder {
@@ -283,11 +272,7 @@ pub fn assemble_duet_bundle(
     weights::save_as(&ae, &hp, Layout::Burn, &[], f16).map_err(|e| err(&hp, e.to_string()))?;
     let dp = out.join(bundle_files::DENOISER);
     weights::save_as(&net, &dp, Layout::Burn, &[], f16).map_err(|e| err(&dp, e.to_string()))?;
-    let np = ldm_run.join(files::NORMALIZER);
-    let bytes = std::fs::read(&np).map_err(|e| crate::TrainError::io(&np, e))?;
-    let dst = out.join(bundle_files::NORMALIZER);
-    dancegen_io::write_atomic(&dst, |w| w.write_all(&bytes))
-        .map_err(|e| crate::TrainError::io(&dst, e))?;
+    super::bundle_files::copy_normalizer(ldm_run, &out.join(bundle_files::NORMALIZER))?;
     let run = crate::trainer::run_config(ldm_run)?;
     let config = BundleConfig {
         kind: KIND.into(),
@@ -298,9 +283,5 @@ pub fn assemble_duet_bundle(
         denoiser: table.denoiser,
         sampling: SamplingDefaults::default(),
     };
-    let text = toml::to_string_pretty(&config).expect("config serialises");
-    let mp = out.join(bundle_files::MODEL_TOML);
-    dancegen_io::write_atomic(&mp, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| crate::TrainError::io(&mp, e))?;
-    Ok(())
+    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
 }

@@ -160,18 +160,10 @@ pub fn assemble_group_bundle(
         path: p.to_path_buf(),
         reason,
     };
-    let mp = run.join(files::MODEL_TOML);
-    let text = std::fs::read_to_string(&mp).map_err(|e| crate::TrainError::io(&mp, e))?;
-    let t: toml::Table = toml::from_str(&text).map_err(|e| err(&mp, e.to_string()))?;
-    if t.get("kind").and_then(|k| k.as_str()) != Some(KIND) {
-        return Err(err(&mp, format!("not a finished {KIND} run")));
-    }
-    let config: GroupModelConfig = t
-        .get("config")
-        .cloned()
-        .ok_or_else(|| err(&mp, "no [config]".into()))?
-        .try_into()
-        .map_err(|e: toml::de::Error| err(&mp, e.message().to_string()))?;
+    let mut config: GroupModelConfig = super::bundle_files::finished_run_config(run, KIND)?;
+    // Sampling is not trained: the bundle gets this version's defaults (as the duet bundle
+    // does), so a rebuilt bundle matches the shipped one.
+    config.sampling = dancegen_tcdiffpp::config::SamplingConfig::default();
     let dev = device::inference();
     let d = dancegen_nn::edge151::DIMS;
     let net = weights::load(
@@ -184,20 +176,12 @@ pub fn assemble_group_bundle(
     let dp = out.join(bundle_files::DENOISER);
     weights::save_as(&net, &dp, Layout::Burn, &[], weights::Storage::F16)
         .map_err(|e| err(&dp, e.to_string()))?;
-    let np = run.join(files::NORMALIZER);
-    let bytes = std::fs::read(&np).map_err(|e| crate::TrainError::io(&np, e))?;
-    let dst = out.join(bundle_files::NORMALIZER);
-    dancegen_io::write_atomic(&dst, |w| w.write_all(&bytes))
-        .map_err(|e| crate::TrainError::io(&dst, e))?;
+    super::bundle_files::copy_normalizer(run, &out.join(bundle_files::NORMALIZER))?;
     let bundle = BundleConfig {
         kind: BUNDLE_KIND.into(),
         name: name.into(),
         fps: 30.0,
         model: config,
     };
-    let text = toml::to_string_pretty(&bundle).expect("config serialises");
-    let mp = out.join(bundle_files::MODEL_TOML);
-    dancegen_io::write_atomic(&mp, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| crate::TrainError::io(&mp, e))?;
-    Ok(())
+    super::bundle_files::write_model_toml(&bundle, &out.join(bundle_files::MODEL_TOML))
 }
