@@ -47,17 +47,24 @@ LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placi
 HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
 HELD_SOLO = HELD_TAKES + ["05_07"]
 
+# (key, label, controlled by a formation, `--sampler` or None for the model's default).
 CONFIGS = [
-    ("full", "TCDiff++ (full system: LGDS `--sampler lgds`, formation control, separation)"),
-    ("parallel", "parallel long-form sampler (`--sampler parallel`, the default), formation control"),
-    ("free", "free dance (no formation; the model chooses; the model's default sampler)"),
-    ("b1", "B1: N independent solo dances (models/lodgepp-small) placed on the formation"),
+    ("full", "TCDiff++ (full system: the default parallel sampler, formation control, separation)",
+     True, None),
+    ("lgds", "LGDS (`--sampler lgds`), formation control", True, "lgds"),
+    ("free", "free dance (no formation; the model chooses; the default sampler)", False, None),
+    ("b1", "B1: N independent solo dances (models/lodgepp-small) placed on the formation",
+     True, None),
 ]
+# Ablation rows: (key, label, switch); each is the full system (formation control, default
+# sampler) with the bundle of configs/ablations/tcdiffpp_<key>_500.toml, all at the same
+# 500-step budget next to their own full-system control `full_500`.
 ABLATIONS = [
-    ("w/o fusion projection", "fusion_projection = false"),
-    ("w/o footwork adaptor", "footwork = false"),
-    ("w/o positioning embedding", "positioning = false"),
-    ("w/o distance loss", "[model.loss] distance = 0"),
+    ("full_500", "full system, 500 steps (the ablations' control)", "none"),
+    ("no_fp", "w/o fusion projection", "fusion_projection = false"),
+    ("no_fa", "w/o footwork adaptor", "footwork = false"),
+    ("no_dpe", "w/o positioning embedding", "positioning = false"),
+    ("no_dl", "w/o distance loss", "[model.loss] distance = 0"),
 ]
 
 
@@ -194,7 +201,8 @@ def real_references(binary, data, out):
 # ----------------------------------------------------------------------------- generation
 
 
-def generate(binary, cfg, clip, seed, model, solo_model, out, steps):
+def generate(binary, cfg, clip, seed, model, solo_model, out, steps, controlled=True,
+             sampler=None):
     d = os.path.join(out, "gen", cfg, f"seed{seed}")
     os.makedirs(d, exist_ok=True)
     scene = os.path.join(d, clip["name"] + ".npy")
@@ -251,12 +259,10 @@ def generate(binary, cfg, clip, seed, model, solo_model, out, steps):
         return scene, meta
     cmd = [binary, "generate", clip["song"], "--system", "group", "--dancers",
            str(clip["dancers"]), "--model", model, "-o", scene, "-o", meta] + base
-    if cfg in ("full", "parallel"):
+    if controlled:
         cmd += ["--formation", clip["formation"]]
-    if cfg == "parallel":
-        cmd += ["--sampler", "parallel"]
-    if cfg == "full":
-        cmd += ["--sampler", "lgds"]
+    if sampler:
+        cmd += ["--sampler", sampler]
     run(cmd)
     m = json.load(open(meta))
     slim = {k: m.get(k) for k in ("start_order", "end_order", "trajectory_error_mean_m",
@@ -296,16 +302,33 @@ def scene_motion_stats(scene):
     return [j for j in jerks if j is not None], (max(jumps) if jumps else None)
 
 
+def runs(args):
+    """(key, model, controlled, sampler) of every configuration to dance: the main ones and the
+    ablations whose bundles were given."""
+    out = [(k, args.model, ctl, smp) for k, _, ctl, smp in CONFIGS]
+    given = dict(a.split("=", 1) for a in args.ablation)
+    unknown = set(given) - {k for k, _, _ in ABLATIONS}
+    if unknown:
+        raise SystemExit(f"--ablation: unknown key(s) {sorted(unknown)}; "
+                         f"known: {[k for k, _, _ in ABLATIONS]}")
+    for k, _, _ in ABLATIONS:
+        if k in given:
+            if not os.path.exists(os.path.join(given[k], "model.toml")):
+                raise SystemExit(f"--ablation {k}={given[k]}: no model.toml there")
+            out.append((k, given[k], True, None))
+    return out
+
+
 def evaluate(binary, args, clips, out):
     solo_gt, couples_gt = real_references(binary, args.data, out)
     results = {}
-    for cfg, _ in CONFIGS:
+    for cfg, model, controlled, sampler in runs(args):
         for seed in args.seeds:
             log(f"{cfg} seed {seed}")
             scenes, dancers, metas, bas = [], [], [], []
             for c in clips:
-                scene, meta = generate(binary, cfg, c, seed, args.model, args.solo_model, out,
-                                       args.steps)
+                scene, meta = generate(binary, cfg, c, seed, model, args.solo_model, out,
+                                       args.steps, controlled, sampler)
                 scenes.append((c, scene))
                 metas.append((c, json.load(open(meta))))
                 parts = split(scene, os.path.join(out, "split", cfg, f"seed{seed}"))
@@ -400,18 +423,23 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
              "minimum-jerk between), and are measured against the requested path those "
              "keyframes give.")
     L.append("")
-    L.append("| configuration | collision % ↓ | min distance m | TIF % ↓ | GMC | FID_k ↓ | Div_k | "
-             "BAS ↑ | PFC ↓ | FSR ↓ | boundary jerk ↓ | max root step near a join m ↓ | "
-             "trajectory error mean / final m ↓ | end order as requested % |")
-    L.append("|" + "---|" * 14)
+    header = ("| configuration | collision % ↓ | min distance m | TIF % ↓ | GMC | FID_k ↓ | Div_k | "
+              "BAS ↑ | PFC ↓ | FSR ↓ | boundary jerk ↓ | max root step near a join m ↓ | "
+              "trajectory error mean / final m ↓ | end order as requested % |")
 
     def col(cfg, f, digits, scale=1.0):
         m, s, _ = stats(per_seed(results, cfg, seeds, f))
         return fmt(m, s, digits, scale)
 
-    for cfg, label in CONFIGS:
-        if (cfg, seeds[0]) not in results:
-            continue
+    def table(rows):
+        L.append(header)
+        L.append("|" + "---|" * 14)
+        for cfg, label in rows:
+            if (cfg, seeds[0]) not in results:
+                continue
+            L.append(row(cfg, label))
+
+    def row(cfg, label):
         sc = lambda r, k: r["scenes"].get(k)  # noqa: E731
         mind = col(cfg, lambda r: min(x["min_distance"] for x in r["scenes"]["per_clip"]), 2)
         traj = "n/a"
@@ -422,7 +450,7 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
             traj = f"{tm} / {tf}"
             order = col(cfg, lambda r: end_order_ok(clips, r), 0, 100.0)
         jerk = "n/a (solo seams)" if cfg == "b1" else col(cfg, lambda r: mean_or_none(r["jerk"]), 3)
-        L.append("| " + " | ".join([
+        return "| " + " | ".join([
             label,
             col(cfg, lambda r: sc(r, "collision"), 2, 100.0),
             mind,
@@ -437,7 +465,9 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
             col(cfg, lambda r: max(r["jump"]) if r["jump"] else None, 3),
             traj,
             order,
-        ]) + " |")
+        ]) + " |"
+
+    table([(k, label) for k, label, _, _ in CONFIGS])
     L.append(f"| real held-out solo tracks / couples (reference) | "
              f"{fmt(real_couples.get('collision'), None, 2, 100.0)} (couples) | "
              f"{fmt(min(x['min_distance'] for x in real_couples['per_clip']), None, 2)} (partners) | "
@@ -457,12 +487,26 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
              "(`dancegen_metrics::longform`'s band; joins at frames 150, 225, …). Real couples are partners, so their distances and "
              "intersections are contact, not collisions.")
     L.append("")
+    if ("lgds", seeds[0]) in results and ("full", seeds[0]) in results:
+        g0 = lambda cfg, f: stats(per_seed(results, cfg, seeds, f))[0]  # noqa: E731
+        jerk_of = lambda r: mean_or_none(r["jerk"])  # noqa: E731
+        jump_of = lambda r: max(r["jump"]) if r["jump"] else None  # noqa: E731
+        coll_of = lambda r: r["scenes"].get("collision")  # noqa: E731
+        L.append(f"**Sampler.** The full system's row uses the default sampler, the parallel one "
+                 f"(`SamplingConfig::default`, models/tcdiffpp-small/model.toml); the LGDS row is "
+                 f"the same dances with `--sampler lgds`. Boundary jerk {fmt(g0('full', jerk_of), None, 2)} "
+                 f"(parallel) against {fmt(g0('lgds', jerk_of), None, 2)} (LGDS); largest root step "
+                 f"near a join {fmt(g0('full', jump_of), None, 3)} m against "
+                 f"{fmt(g0('lgds', jump_of), None, 3)} m; collisions "
+                 f"{fmt(g0('full', coll_of), None, 2, 100.0)} % against "
+                 f"{fmt(g0('lgds', coll_of), None, 2, 100.0)} %.")
+        L.append("")
     # N = 2 against the real couples
     L.append("## N = 2 against the held-out real salsa couples (takes 13 and 14, 10 s windows)")
     L.append("")
     L.append("| configuration | GMR ↓ | GMC | TIF % |")
     L.append("|---|---|---|---|")
-    for cfg, label in CONFIGS:
+    for cfg, label, _, _ in CONFIGS:
         if (cfg, seeds[0]) not in results or results[(cfg, seeds[0])]["couples"] is None:
             continue
         c = lambda f: fmt(*stats(per_seed(results, cfg, seeds, f))[:2], 2)  # noqa: E731
@@ -490,13 +534,24 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
         m = lambda f, d, s=1.0: fmt(*stats(per_seed(results, "full", seeds, f))[:2], d, s)  # noqa: E731
         L.append(f"| {n} | {m(col_n, 2, 100.0)} | {m(tr_n, 3)} | {m(ord_n, 0, 100.0)} |")
     L.append("")
-    L.append("## Ablations not run")
+    ran = [(k, label, sw) for k, label, sw in ABLATIONS if (k, seeds[0]) in results]
+    L.append("## Ablations (500 training steps each, against their own 500-step control)")
     L.append("")
-    L.append("Each needs its own training run of the same budget (about an hour here); none was "
-             "trained yet, so these rows are missing rather than estimated:")
-    L.append("")
-    for name, switch in ABLATIONS:
-        L.append(f"- {name} (`{switch}` in configs/tcdiffpp_small.toml)")
+    if ran:
+        L.append("Each row is a model trained from scratch on the same data, seed and budget "
+                 "(configs/ablations/tcdiffpp_<key>_500.toml: 500 steps, a quarter of the "
+                 "shipped model's, because five full runs do not fit a session on 2 cores), "
+                 "danced like the full system above (formation control, the default sampler, "
+                 "separation). Compare the rows with each other and with their control, not "
+                 "with the shipped model. Switches: " +
+                 "; ".join(f"{label}: `{sw}`" for k, label, sw in ran if sw != "none") + ".")
+        L.append("")
+        table([(k, label) for k, label, _ in ran])
+    missing = [(label, sw) for k, label, sw in ABLATIONS if (k, seeds[0]) not in results]
+    if missing:
+        L.append("")
+        L.append("Not run (no bundle given to the evaluation, so these rows are missing rather "
+                 "than estimated): " + "; ".join(label for label, _ in missing) + ".")
     L.append("")
     # targets
     L.append("## Targets (issue #17)")
@@ -542,6 +597,8 @@ def main():
     ap.add_argument("--per-n", type=int, default=4)
     ap.add_argument("--steps", type=int, default=None)
     ap.add_argument("--load-note", default="")
+    ap.add_argument("--ablation", nargs="*", default=[], metavar="KEY=BUNDLE",
+                    help="ablation bundles to add as rows, e.g. no_fp=target/ablations/no_fp")
     args = ap.parse_args()
     started = time.time()
     os.makedirs(args.out, exist_ok=True)

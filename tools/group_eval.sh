@@ -14,6 +14,9 @@
 #   DANCEGEN=target/release/dancegen (snapshotted into $OUT/bin)
 #   OUT=target/group-eval (finished generations are reused; delete it to start over)
 #   REPORT=docs/group-eval.md   PYTHON=python3 (3.11+, standard library only)
+#   ABLATIONS="full_500=DIR no_fp=DIR no_fa=DIR no_dpe=DIR no_dl=DIR": bundles of the
+#     configs/ablations/tcdiffpp_*_500.toml runs (`dancegen bundle --group RUN -o DIR`), added
+#     as the report's ablation rows
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -39,4 +42,4 @@ snapshot_binary "${DANCEGEN:-$ROOT/target/release/dancegen}" "$OUT"
 "$PYTHON" "$ROOT/tools/group_eval.py" --bin "$BIN" --dataset "$DATASET" \
     --data "$ROOT/../shared/data" --model "$MODEL" --solo-model "$SOLO_MODEL" --out "$OUT" \
     --report "$REPORT" --seeds $SEEDS --per-n "$PER_N" ${STEPS:+--steps "$STEPS"} \
-    --load-note "$LOAD_NOTE"
+    --load-note "$LOAD_NOTE" ${ABLATIONS:+--ablation $ABLATIONS}

@@ -25,6 +25,12 @@
 //!   is reached.
 //! - Only the horizontal root position changes: poses, heights (floor contact) and the fixed
 //!   dancer are kept.
+//!
+//! A **group** ([`group_separation_offsets`] with [`SeparationConfig::group`]) is stricter: its
+//! dancers are not partners and never hold hands, so hands count like every other capsule, and
+//! two pelvises closer than [`crate::formation::MIN_SEPARATION_M`] horizontally are pushed apart
+//! along the line between them even where no capsules touch (the group collision rule of the
+//! metrics, group.md P10), so a dancer never stands in another's personal space.
 
 use crate::capsule_body::{
     BodyPart, CAPSULES, Capsule, capsule_endpoints, frame_joints, segment_closest_points,
@@ -41,6 +47,11 @@ pub struct SeparationConfig {
     pub sigma_frames: f64,
     /// Upper bound on push-and-smooth rounds.
     pub max_rounds: usize,
+    /// Whether hand capsules are separated too; `false` for a couple (module docs).
+    pub separate_hands: bool,
+    /// Pelvises closer than this horizontally (metres) are pushed apart as well, to this
+    /// distance plus the margin; `None` for a couple, whose partners stand close.
+    pub min_root_distance_m: Option<f64>,
 }
 
 impl Default for SeparationConfig {
@@ -55,6 +66,27 @@ impl Default for SeparationConfig {
             margin_m: 0.01,
             sigma_frames: 3.0,
             max_rounds: 12,
+            separate_hands: false,
+            min_root_distance_m: None,
+        }
+    }
+}
+
+impl SeparationConfig {
+    /// The group's rule (module docs): hands count and pelvises keep
+    /// [`crate::formation::MIN_SEPARATION_M`]. Our choices, checked in docs/group-eval.md: a
+    /// 5 cm margin rather than 1 cm, because the group metrics' collision body
+    /// (`dancegen_metrics::group::CapsuleRadii`: shins 0.07 m, forearms 0.05 m, hands 0.04 m)
+    /// is thicker than this module's by up to 2 cm a capsule, so two shins that clear here by
+    /// less than 4 cm still touch there; and 30 rounds rather than 12, since each round clears
+    /// a one-frame overlap only by the kernel's peak share (about 13 % at σ = 3).
+    pub fn group() -> Self {
+        Self {
+            margin_m: 0.05,
+            max_rounds: 30,
+            separate_hands: true,
+            min_root_distance_m: Some(crate::formation::MIN_SEPARATION_M),
+            ..Self::default()
         }
     }
 }
@@ -71,7 +103,7 @@ pub struct Overlap {
 /// Pelvises closer than this (metres, horizontally) give no direction to step back along.
 const PELVIS_AXIS_MIN_M: f64 = 0.05;
 
-/// Whether a capsule takes part in the separation (module docs: hands are exempt).
+/// Whether a capsule takes part in a couple's separation (module docs: hands are exempt).
 pub fn is_separated(capsule: &Capsule) -> bool {
     capsule.part != BodyPart::Hand
 }
@@ -93,11 +125,11 @@ struct Posed {
     bound: f64,
 }
 
-/// The separated capsules of one posed body.
-fn posed(joints: &[[f64; 3]; 24]) -> Vec<Posed> {
+/// The separated capsules of one posed body (hands too if `hands`).
+fn posed(joints: &[[f64; 3]; 24], hands: bool) -> Vec<Posed> {
     CAPSULES
         .iter()
-        .filter(|c| is_separated(c))
+        .filter(|c| hands || is_separated(c))
         .map(|c| {
             let (a, b) = capsule_endpoints(joints, c);
             let axis = sub(b, a);
@@ -117,13 +149,33 @@ fn posed(joints: &[[f64; 3]; 24]) -> Vec<Posed> {
 }
 
 /// The deepest overlap (with `margin_m`) between the separated capsules of `mover` and `fixed`
-/// in one frame, or `None` if every pair is at least `margin_m` apart.
+/// in one frame under a couple's rule (hands exempt), or `None` if every pair is at least
+/// `margin_m` apart.
 pub fn deepest_overlap(
     mover: &[[f64; 3]; 24],
     fixed: &[[f64; 3]; 24],
     margin_m: f64,
 ) -> Option<Overlap> {
-    let (pm_caps, pf_caps) = (posed(mover), posed(fixed));
+    deepest_overlap_under(
+        mover,
+        fixed,
+        &SeparationConfig {
+            margin_m,
+            ..SeparationConfig::default()
+        },
+    )
+}
+
+/// [`deepest_overlap`] under `config`'s rule: its margin, hands if it separates them, and its
+/// pelvis distance, whose shortfall counts as an overlap along the pelvis-to-pelvis line.
+pub fn deepest_overlap_under(
+    mover: &[[f64; 3]; 24],
+    fixed: &[[f64; 3]; 24],
+    config: &SeparationConfig,
+) -> Option<Overlap> {
+    let margin_m = config.margin_m;
+    let hands = config.separate_hands;
+    let (pm_caps, pf_caps) = (posed(mover, hands), posed(fixed, hands));
     let mut best: Option<(f64, [f64; 3], [f64; 3])> = None;
     for cm in &pm_caps {
         for cf in &pf_caps {
@@ -145,11 +197,21 @@ pub fn deepest_overlap(
             }
         }
     }
-    let (depth_m, pm, pf) = best?;
     let pelvis = sub(mover[0], fixed[0]);
-    let axis = (pelvis[0].hypot(pelvis[2]) >= PELVIS_AXIS_MIN_M)
+    let pelvis_distance = pelvis[0].hypot(pelvis[2]);
+    let axis = (pelvis_distance >= PELVIS_AXIS_MIN_M)
         .then(|| horizontal_unit(pelvis))
         .flatten();
+    if let Some(min) = config.min_root_distance_m {
+        let depth_m = min + margin_m - pelvis_distance;
+        if depth_m > 0.0 && best.is_none_or(|(b, _, _)| depth_m >= b) {
+            return Some(Overlap {
+                depth_m,
+                away: axis.unwrap_or([1.0, 0.0]),
+            });
+        }
+    }
+    let (depth_m, pm, pf) = best?;
     let away = match (horizontal_unit(sub(pm, pf)), axis) {
         // An arm reaching round the partner's back: its closest-point push points through
         // the partner, and neighbouring frames push opposite ways; step back instead.
@@ -186,7 +248,7 @@ pub fn separation_offsets(
                 }
                 let [ox, oz] = offsets[f];
                 let moved = mover_frames[f].map(|[x, y, z]| [x + ox, y, z + oz]);
-                match deepest_overlap(&moved, &fixed_frames[f], config.margin_m) {
+                match deepest_overlap_under(&moved, &fixed_frames[f], config) {
                     Some(o) => {
                         penetrating |= o.depth_m > config.margin_m;
                         [o.away[0] * o.depth_m, o.away[1] * o.depth_m]
@@ -368,6 +430,60 @@ mod tests {
         m[22] = [chest[0] - 0.05, chest[1], chest[2] - 0.22];
         let o = deepest_overlap(&m, &f, 0.0).expect("the arm is in the chest");
         assert!(o.away[1] > 0.99, "{o:?}");
+    }
+
+    /// Smallest horizontal pelvis distance over the frames of two flat clips.
+    fn closest_pelvises(a: &[f64], b: &[f64]) -> f64 {
+        (0..a.len() / 72)
+            .map(|f| {
+                let (p, q) = (frame_joints(a, f)[0], frame_joints(b, f)[0]);
+                (p[0] - q[0]).hypot(p[2] - q[2])
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn a_group_keeps_pelvises_apart_where_no_capsules_touch() {
+        // Front to back 0.3 m apart along Z: the trunks clear (0.24 m thick together), so a
+        // couple is left alone, but the pelvises are closer than the group's 0.45 m.
+        let (m, f) = (rest_at(0.0, 0.3, 20), rest_at(0.0, 0.0, 20));
+        let couple = separation_offsets(&m, &f, &SeparationConfig::default());
+        assert!(couple.iter().all(|o| *o == [0.0, 0.0]), "{:?}", couple[0]);
+        let group = SeparationConfig::group();
+        let off = separation_offsets(&m, &f, &group);
+        let d = closest_pelvises(&shifted(&m, &off), &f);
+        let min = crate::formation::MIN_SEPARATION_M;
+        assert!(d >= min && d < min + 2.0 * group.margin_m, "{d}");
+        assert!(
+            off.iter().all(|o| o[1] > 0.0 && o[0].abs() < 0.01),
+            "{:?}",
+            off[0]
+        );
+    }
+
+    #[test]
+    fn a_group_separates_hands_a_couple_may_join() {
+        // The hands-may-touch placement: a couple keeps it, a group moves the dancers apart.
+        let rest = Skeleton::smpl24().rest_positions();
+        let gap = 2.0 * rest[20][0] + 0.25;
+        let (m, f) = (rest_at(gap, 0.0, 5), rest_at(0.0, 0.0, 5));
+        let group = SeparationConfig::group();
+        let off = separation_offsets(&m, &f, &group);
+        let moved = shifted(&m, &off);
+        assert!(off.iter().all(|o| o[0] > 0.0), "{:?}", off[0]);
+        for k in 0..5 {
+            assert!(
+                deepest_overlap_under(
+                    &frame_joints(&moved, k),
+                    &frame_joints(&f, k),
+                    &SeparationConfig {
+                        margin_m: 0.0,
+                        ..group
+                    }
+                )
+                .is_none()
+            );
+        }
     }
 
     #[test]

@@ -267,7 +267,7 @@ impl DanceSystem for Group {
         put_on_one_floor(&mut dancers)?;
         if opts.separation {
             let joints = world_joints(&dancers)?;
-            let offsets = group_separation_offsets(&joints, &SeparationConfig::default());
+            let offsets = group_separation_offsets(&joints, &SeparationConfig::group());
             let mut largest = 0f64;
             for (m, off) in dancers.iter_mut().zip(&offsets) {
                 for (p, o) in m.trans.chunks_exact_mut(3).zip(off) {
