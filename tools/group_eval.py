@@ -47,6 +47,8 @@ LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placi
 HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
 HELD_SOLO = HELD_TAKES + ["05_07"]
 
+GROUP_ARGS = []  # --group-args, split (module-wide: every group `generate` gets them)
+
 # (key, label, controlled by a formation, `--sampler` or None for the model's default).
 CONFIGS = [
     ("full", "TCDiff++ (full system: the default parallel sampler, formation control, separation)",
@@ -213,6 +215,7 @@ def generate(binary, cfg, clip, seed, model, solo_model, out, steps, controlled=
             "--progress", "none", "-q"]
     if steps:
         base += ["--steps", str(steps)]
+    extra = GROUP_ARGS if cfg != "b1" else []
     t0 = time.time()
     if cfg == "b1":
         n = clip["dancers"]
@@ -258,7 +261,7 @@ def generate(binary, cfg, clip, seed, model, solo_model, out, steps, controlled=
         }, open(meta, "w"))
         return scene, meta
     cmd = [binary, "generate", clip["song"], "--system", "group", "--dancers",
-           str(clip["dancers"]), "--model", model, "-o", scene, "-o", meta] + base
+           str(clip["dancers"]), "--model", model, "-o", scene, "-o", meta] + base + extra
     if controlled:
         cmd += ["--formation", clip["formation"]]
     if sampler:
@@ -305,7 +308,8 @@ def scene_motion_stats(scene):
 def runs(args):
     """(key, model, controlled, sampler) of every configuration to dance: the main ones and the
     ablations whose bundles were given."""
-    out = [(k, args.model, ctl, smp) for k, _, ctl, smp in CONFIGS]
+    out = [(k, args.model, ctl, smp) for k, _, ctl, smp in CONFIGS
+           if not args.only or k in args.only]
     given = dict(a.split("=", 1) for a in args.ablation)
     unknown = set(given) - {k for k, _, _ in ABLATIONS}
     if unknown:
@@ -317,6 +321,41 @@ def runs(args):
                 raise SystemExit(f"--ablation {k}={given[k]}: no model.toml there")
             out.append((k, given[k], True, None))
     return out
+
+
+def pose_spread_cm(flat, t):
+    """Motion energy of one dancer: mean distance (cm) of its pelvis-relative joints from their
+    own mean over the clip; a frozen pose scores 0."""
+    rel = [[flat[f * 72 + 3 * j + c] - flat[f * 72 + c] for j in range(24) for c in range(3)]
+           for f in range(t)]
+    mean = [statistics.fmean(col) for col in zip(*rel)]
+    total = 0.0
+    for r in rel:
+        for j in range(24):
+            total += math.dist(r[3 * j:3 * j + 3], mean[3 * j:3 * j + 3])
+    return 100.0 * total / (24 * t)
+
+
+def scene_spread(scene):
+    shape, a = read_npy(scene)
+    n, t = shape[0], shape[1]
+    return statistics.fmean(pose_spread_cm(a[k * t * 72:(k + 1) * t * 72], t) for k in range(n))
+
+
+def seed_difference_cm(scene_a, scene_b):
+    """Mean distance (cm) between the pelvis-relative joints of two seeds' dances of one clip."""
+    (sa, a), (sb, b) = read_npy(scene_a), read_npy(scene_b)
+    n, t = min(sa[0], sb[0]), min(sa[1], sb[1])
+    total, count = 0.0, 0
+    for k in range(n):
+        for f in range(0, t, 3):  # every third frame: enough for a mean
+            oa, ob = (k * sa[1] + f) * 72, (k * sb[1] + f) * 72
+            for j in range(1, 24):
+                pa = [a[oa + 3 * j + c] - a[oa + c] for c in range(3)]
+                pb = [b[ob + 3 * j + c] - b[ob + c] for c in range(3)]
+                total += math.dist(pa, pb)
+                count += 1
+    return 100.0 * total / count
 
 
 def evaluate(binary, args, clips, out):
@@ -350,6 +389,7 @@ def evaluate(binary, args, clips, out):
                 run([binary, "eval", "--fps", "30", "--pred"] + n2 + ["--gt", couples_gt,
                      "--metrics", "gmr,gmc,tif", "--json", cj, "-q"])
             jerk, jump = [], []
+            spread = [scene_spread(s) for _, s in scenes]
             for c, s in scenes:
                 bj, rj = scene_motion_stats(s)
                 jerk += bj
@@ -362,6 +402,8 @@ def evaluate(binary, args, clips, out):
                 "bas": [b for b in bas if b is not None],
                 "jerk": jerk,
                 "jump": jump,
+                "spread": statistics.fmean(spread),
+                "scene_paths": [s for _, s in scenes],
                 "metas": metas,
             }
     rj = os.path.join(out, "eval", "real_couples.json")
@@ -371,7 +413,13 @@ def evaluate(binary, args, clips, out):
     run([binary, "eval", "--fps", "30", "--pred", solo_gt, "--gt", solo_gt, "--metrics",
          "div_k,pfc,fsr",
          "--json", rs, "-q"])
-    return results, json.load(open(rj)), json.load(open(rs))
+    real_solo = json.load(open(rs))
+    spreads = []
+    for f in sorted(os.listdir(solo_gt)):
+        shape, a = read_npy(os.path.join(solo_gt, f))
+        spreads.append(pose_spread_cm(a, shape[0]))
+    real_solo["spread"] = statistics.fmean(spreads)
+    return results, json.load(open(rj)), real_solo
 
 
 # ----------------------------------------------------------------------------- report
@@ -406,7 +454,9 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
     L.append("")
     L.append(f"Generated by `bash tools/group_eval.sh` on {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
              f"(commit `{commit}`{', with uncommitted changes' if dirty else ''}); model "
-             f"`{os.path.relpath(args.model)}`; machine: 2 cores, {load_note}; wall time "
+             f"`{os.path.relpath(args.model)}`"
+             f"{'; group dances with `' + ' '.join(GROUP_ARGS) + '`' if GROUP_ARGS else ''}"
+             f"{'; steps ' + str(args.steps) if args.steps else ''}; machine: 2 cores, {load_note}; wall time "
              f"{(time.time() - started) / 60:.0f} min.")
     L.append("")
     L.append("**Everything here is measured on held-out material the model never saw**: the song "
@@ -501,6 +551,30 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
                  f"{fmt(g0('full', coll_of), None, 2, 100.0)} % against "
                  f"{fmt(g0('lgds', coll_of), None, 2, 100.0)} %.")
         L.append("")
+    # motion energy
+    L.append("## Motion energy and dependence on the seed")
+    L.append("")
+    L.append("| configuration | pose spread cm | difference between seeds cm |")
+    L.append("|---|---|---|")
+    allrows = [(k, label) for k, label, _, _ in CONFIGS] + [(k, label) for k, label, _ in ABLATIONS]
+    for cfg, label in allrows:
+        if (cfg, seeds[0]) not in results:
+            continue
+        spread = col(cfg, lambda r: r["spread"], 2)
+        diffs = []
+        if len(seeds) > 1 and (cfg, seeds[1]) in results:
+            for a, b in zip(results[(cfg, seeds[0])]["scene_paths"],
+                            results[(cfg, seeds[1])]["scene_paths"]):
+                diffs.append(seed_difference_cm(a, b))
+        L.append(f"| {label} | {spread} | {fmt(mean_or_none(diffs), None, 2)} |")
+    L.append(f"| real held-out solo tracks (10 s clips) | {fmt(real_solo.get('spread'), None, 2)} | n/a |")
+    L.append("")
+    L.append(f"Pose spread: each dancer's mean distance of its pelvis-relative joints from their own "
+             f"mean over the clip, averaged over dancers and clips (a frozen pose scores 0). "
+             f"Difference between seeds: mean distance between the pelvis-relative joints of seeds "
+             f"{seeds[0]} and {seeds[1] if len(seeds) > 1 else '-'} dancing the same clip. A "
+             "diffusion model that uses its noise input dances differently per seed.")
+    L.append("")
     # N = 2 against the real couples
     L.append("## N = 2 against the held-out real salsa couples (takes 13 and 14, 10 s windows)")
     L.append("")
@@ -549,7 +623,8 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
         table([(k, label) for k, label, _ in ran])
     missing = [(label, sw) for k, label, sw in ABLATIONS if (k, seeds[0]) not in results]
     if missing:
-        L.append("")
+        if ran:
+            L.append("")
         L.append("Not run (no bundle given to the evaluation, so these rows are missing rather "
                  "than estimated): " + "; ".join(label for label, _ in missing) + ".")
     L.append("")
@@ -597,9 +672,16 @@ def main():
     ap.add_argument("--per-n", type=int, default=4)
     ap.add_argument("--steps", type=int, default=None)
     ap.add_argument("--load-note", default="")
+    ap.add_argument("--only", nargs="*", default=[], metavar="KEY",
+                    help="main configurations to run (default all: " +
+                    " ".join(k for k, _, _, _ in CONFIGS) + ")")
+    ap.add_argument("--group-args", default="",
+                    help="extra `dancegen generate` arguments for the group dances, e.g. "
+                    "'--guidance 1' (the report names them)")
     ap.add_argument("--ablation", nargs="*", default=[], metavar="KEY=BUNDLE",
                     help="ablation bundles to add as rows, e.g. no_fp=target/ablations/no_fp")
     args = ap.parse_args()
+    GROUP_ARGS[:] = args.group_args.split()
     started = time.time()
     os.makedirs(args.out, exist_ok=True)
     clips = select_clips(args.dataset, args.per_n, args.out)

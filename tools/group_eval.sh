@@ -14,6 +14,8 @@
 #   DANCEGEN=target/release/dancegen (snapshotted into $OUT/bin)
 #   OUT=target/group-eval (finished generations are reused; delete it to start over)
 #   REPORT=docs/group-eval.md   PYTHON=python3 (3.11+, standard library only)
+#   ONLY="full lgds" (main configurations to run; default all)   GROUP_ARGS="--guidance 1"
+#     (extra `dancegen generate` arguments for the group dances, named in the report)
 #   ABLATIONS="full_500=DIR no_fp=DIR no_fa=DIR no_dpe=DIR no_dl=DIR": bundles of the
 #     configs/ablations/tcdiffpp_*_500.toml runs (`dancegen bundle --group RUN -o DIR`), added
 #     as the report's ablation rows
@@ -42,4 +44,5 @@ snapshot_binary "${DANCEGEN:-$ROOT/target/release/dancegen}" "$OUT"
 "$PYTHON" "$ROOT/tools/group_eval.py" --bin "$BIN" --dataset "$DATASET" \
     --data "$ROOT/../shared/data" --model "$MODEL" --solo-model "$SOLO_MODEL" --out "$OUT" \
     --report "$REPORT" --seeds $SEEDS --per-n "$PER_N" ${STEPS:+--steps "$STEPS"} \
-    --load-note "$LOAD_NOTE" ${ABLATIONS:+--ablation $ABLATIONS}
+    --load-note "$LOAD_NOTE" ${ABLATIONS:+--ablation $ABLATIONS} \
+    ${ONLY:+--only $ONLY} --group-args "${GROUP_ARGS:-}"
