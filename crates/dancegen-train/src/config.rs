@@ -166,6 +166,13 @@ pub struct DataConfig {
     /// (`dancegen_motion::repr::duet::leader_frames`); 0 = each frame's own heading.
     #[serde(default)]
     pub heading_sigma: f64,
+    /// `normalizer = "mean_std"`: the smallest standard deviation a channel is scaled by
+    /// (0 = none, the channel's own std unless below [`crate::data::MIN_STD`]). Channels that
+    /// barely move in the data, such as the SMPL hand joints of retargeted BVH (6D std down to
+    /// 5e-6), otherwise come out of the normaliser as rare values of 30 to 70 that dominate the
+    /// x0 loss and the denoiser's input tokens. Group task only.
+    #[serde(default)]
+    pub std_floor: f64,
 }
 
 fn default_fps() -> f32 {
@@ -378,6 +385,15 @@ impl TrainConfig {
         }
         if !(d.fps.is_finite() && d.fps > 0.0) {
             return Err(format!("[data] fps {} is not a frame rate", d.fps));
+        }
+        if !(d.std_floor.is_finite() && d.std_floor >= 0.0) {
+            return Err(format!(
+                "[data] std_floor {} must be a standard deviation (0 or more)",
+                d.std_floor
+            ));
+        }
+        if d.std_floor > 0.0 && d.representation != Representation::Group {
+            return Err("[data] std_floor is only read by representation = \"group\"".into());
         }
         match (&d.leader, d.representation) {
             (None, Representation::Duet) => {

@@ -191,8 +191,8 @@ pub const GROUP_SLOTS: usize = dancegen_motion::formation::shapes::MAX_DANCERS;
 
 /// Per-channel mean and std of one dancer's EDGE-151 frames over the active slots of group
 /// clips, roots relative to each clip's frame-0 centroid (group.md §5 P3: fitted once on the
-/// training set, never per sample).
-pub fn fit_group_normalizer(clips: &[Clip]) -> Result<Normalizer, String> {
+/// training set, never per sample); no std below `std_floor` (`[data] std_floor`).
+pub fn fit_group_normalizer(clips: &[Clip], std_floor: f64) -> Result<Normalizer, String> {
     let d = Edge151::DIMS;
     let mut per_dancer = Vec::new();
     for c in clips {
@@ -216,7 +216,13 @@ pub fn fit_group_normalizer(clips: &[Clip]) -> Result<Normalizer, String> {
         genre: None,
         dancers: None,
     };
-    Normalizer::fit(NormalizerKind::MeanStd, std::slice::from_ref(&one), d)
+    let mut fitted = Normalizer::fit(NormalizerKind::MeanStd, std::slice::from_ref(&one), d)?;
+    if let Normalizer::MeanStd { std, .. } = &mut fitted {
+        for s in std.iter_mut() {
+            *s = s.max(std_floor);
+        }
+    }
+    Ok(fitted)
 }
 
 /// EDGE-151's Z-up root x and y channels (horizontal; `dancegen_nn::edge151::ROOT_HORIZONTAL`).
@@ -730,5 +736,52 @@ impl WindowDataset {
             },
             next,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two dancers over `frames` frames: channel 20 swings by ±1, channel 30 by ±1e-4.
+    fn two_dancer_clip(frames: usize) -> Clip {
+        let d = Edge151::DIMS;
+        let mut motion = vec![0f32; frames * GROUP_SLOTS * d];
+        for f in 0..frames {
+            let sign = if f % 2 == 0 { 1.0 } else { -1.0 };
+            for s in 0..2 {
+                motion[(f * GROUP_SLOTS + s) * d + 20] = sign;
+                motion[(f * GROUP_SLOTS + s) * d + 30] = 1.0 + sign * 1e-4;
+            }
+        }
+        Clip {
+            source: PathBuf::from("clip"),
+            frames,
+            motion,
+            music: None,
+            genre: None,
+            dancers: Some(2),
+        }
+    }
+
+    fn stds(n: &Normalizer) -> &[f64] {
+        match n {
+            Normalizer::MeanStd { std, .. } => std,
+            _ => panic!("mean_std expected"),
+        }
+    }
+
+    #[test]
+    fn the_group_std_floor_lifts_only_the_channels_below_it() {
+        let clips = [two_dancer_clip(10)];
+        let plain = fit_group_normalizer(&clips, 0.0).unwrap();
+        let floored = fit_group_normalizer(&clips, 0.05).unwrap();
+        let (p, f) = (stds(&plain), stds(&floored));
+        assert!((p[20] - 1.0).abs() < 1e-6 && (f[20] - 1.0).abs() < 1e-6);
+        assert!((p[30] - 1e-4).abs() < 1e-5, "{}", p[30]);
+        assert_eq!(f[30], 0.05);
+        // Constant channels (std 0 → 1 by MIN_STD) stay at 1.
+        assert_eq!(p[40], 1.0);
+        assert_eq!(f[40], 1.0);
     }
 }

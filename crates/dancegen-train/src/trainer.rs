@@ -256,7 +256,7 @@ fn run<T: TrainTask>(
         let dims = crate::data::representation_dims(config.data.representation);
         let fitted = if group {
             // One dancer's 151 channels; the task normalises each window after re-basing it.
-            crate::data::fit_group_normalizer(&clips)
+            crate::data::fit_group_normalizer(&clips, config.data.std_floor)
         } else {
             Normalizer::fit(config.data.normalizer, &clips, dims)
         };
