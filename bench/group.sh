@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # TCDiff++ group generation speed: the long group sampler (5 dancers, 1800 frames = 60 s, the
-# model's DDIM steps with guidance 2, LGDS and the parallel sampler) on burn-flex vs the same
+# model's DDIM steps and guidance from its model.toml, LGDS and the parallel sampler) on burn-flex vs the same
 # network, samplers and step count in PyTorch CPU (interleaved in one run), then `dancegen
 # generate SONG --system group --dancers 5 --end 60` end to end against the issue's 20 s target.
 #   bash bench/group.sh [ROUNDS] [CASE]     (default 3 rounds, all cases; CASE filters by name)
@@ -33,6 +33,16 @@ out="${GROUP_RESULTS:-$(mktemp)}"
 : > "$out"
 echo "results: $out" >&2
 echo "load before: $(uptime)" >&2
+# Both sides sample with the shipped model's steps and guidance (its [model.sampling]), the
+# same the end-to-end command uses.
+if [ -f "$model/model.toml" ]; then
+  read -r GROUP_BENCH_STEPS GROUP_BENCH_GUIDANCE < <("$py" -c '
+import sys, tomllib
+s = tomllib.load(open(sys.argv[1], "rb")).get("model", {}).get("sampling", {})
+print(s.get("steps", 6), s.get("guidance", 2.0))' "$model/model.toml")
+  export GROUP_BENCH_STEPS GROUP_BENCH_GUIDANCE
+  echo "sampling: $GROUP_BENCH_STEPS steps, guidance $GROUP_BENCH_GUIDANCE ($model/model.toml)" >&2
+fi
 
 if [ "${GROUP_SKIP_DENOISER:-0}" != 1 ]; then
   bin=$(bench_binary dancegen-tcdiffpp group_sampling "$py")
@@ -78,14 +88,15 @@ fi
 
 echo "load after: $(uptime)" >&2
 "$py" - "$out" <<'PY'
-import json, statistics, sys
+import json, os, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
 runs = lambda c, impl: [r["median_ms"] for r in rows if r["case"] == c and r["impl"] == impl]
 med = lambda v: statistics.median(v) if v else float("nan")
 den = sorted({r["case"] for r in rows if r["impl"] != "dancegen-e2e"})
 if den:
     steps = sorted({r.get("steps") for r in rows if r["impl"] != "dancegen-e2e"})
-    print(f"{f'group sampler ({steps[0]} steps, w = 2)':<34}{'pytorch ms':>12}{'burn ms':>12}"
+    w = os.environ.get("GROUP_BENCH_GUIDANCE", "2")
+    print(f"{f'group sampler ({steps[0]} steps, w = {w})':<34}{'pytorch ms':>12}{'burn ms':>12}"
           f"{'pytorch/burn':>14}  per round (pytorch / burn)")
     for c in den:
         pr, br = runs(c, "pytorch"), runs(c, "burn-flex")

@@ -74,7 +74,11 @@ WINDOW = 150
 TIMESTEPS = 1000
 FRAMES, DANCERS = 1800, 5
 # SamplingConfig::default().
-STEPS, ETA, GUIDANCE = 20, 1.0, 2.0
+# The model's sampling defaults, given by bench/group.sh from models/tcdiffpp-small/model.toml
+# (the Rust side reads the same variables); SamplingConfig::default otherwise.
+STEPS = int(os.environ.get("GROUP_BENCH_STEPS", 6))
+ETA = 1.0
+GUIDANCE = float(os.environ.get("GROUP_BENCH_GUIDANCE", 2.0))
 
 _configs = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "configs")
 

@@ -7,8 +7,10 @@
 //! equal: d 128, 4 FiLM decoder layers, 4 heads, FF 512, 2 music layers, cross-attention),
 //! random weights, identity normaliser. Both sides print the parameter count to stderr.
 //! Sampler: [`dancegen_tcdiffpp::sampler::generate`] with the default sampling
-//! ([`SamplingConfig::default`]: DDIM 20 steps, eta 1, guidance 2, i.e. one forward of the
-//! conditional and one of the null branch per step; clean LGDS prefix), 5 dancers, 1800
+//! ([`SamplingConfig::default`]: DDIM 6 steps, eta 1, guidance 2, i.e. one forward of the
+//! conditional and one of the null branch per step; clean LGDS prefix; `GROUP_BENCH_STEPS` and
+//! `GROUP_BENCH_GUIDANCE` override steps and guidance, as bench/group.sh does with the shipped
+//! model's), 5 dancers, 1800
 //! frames (60 s at 30 fps) = 23 windows of 150 frames at stride 75, random music features.
 //!
 //! Cases: `lgds_5x1800f` (windows one after another) and `parallel_5x1800f` (all 23 windows
@@ -68,12 +70,12 @@ struct Bench {
 }
 
 impl Bench {
-    fn run(&self, steps: usize, sampler: LongSampler) {
+    fn run(&self, steps: usize, guidance: f64, sampler: LongSampler) {
         let defaults = SamplingConfig::default();
         let opts = GroupSampleOptions {
             steps,
             eta: defaults.eta,
-            guidance: defaults.guidance,
+            guidance,
             sampler,
             prefix: defaults.prefix,
             seed: 0,
@@ -121,7 +123,11 @@ fn main() {
         music,
         dev,
     };
-    let steps = SamplingConfig::default().steps;
+    let steps = env_usize("GROUP_BENCH_STEPS", SamplingConfig::default().steps);
+    let guidance = std::env::var("GROUP_BENCH_GUIDANCE")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(SamplingConfig::default().guidance);
     for (name, sampler) in [
         ("lgds_5x1800f", LongSampler::Lgds),
         ("parallel_5x1800f", LongSampler::Parallel),
@@ -129,11 +135,11 @@ fn main() {
         if !want(name) {
             continue;
         }
-        bench.run(2, sampler);
+        bench.run(2, guidance, sampler);
         let mut ms: Vec<f64> = (0..reps)
             .map(|_| {
                 let t = Instant::now();
-                bench.run(steps, sampler);
+                bench.run(steps, guidance, sampler);
                 t.elapsed().as_secs_f64() * 1e3
             })
             .collect();
