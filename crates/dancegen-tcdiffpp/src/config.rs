@@ -35,6 +35,12 @@ pub struct DenoiserConfig {
     pub fusion_projection: bool,
     /// Hidden width of the fusion MLP; the released code uses `2 · d_model` (1024 for 512).
     pub fusion_hidden: Option<usize>,
+    /// Our option, not the paper's: the fusion MLP as a residual branch, `h + FP(h)`. The
+    /// released FP replaces the tokens (no residual), which at d = 512 keeps the noisy input:
+    /// its 1024 hidden units exceed the N × 151 channels of x_t. At d = 128 the default 256
+    /// units cannot carry five dancers' 755 channels, so without the residual the decoder
+    /// never sees most of x_t (docs/group-eval.md, "Motion energy").
+    pub fusion_residual: bool,
     /// Dancer positioning embedding (rank code per slot); `false` keeps only the temporal
     /// code of each frame ("w/o DPE").
     pub positioning: bool,
@@ -58,6 +64,7 @@ impl Default for DenoiserConfig {
             mixer: SequenceMixer::CrossAttention,
             fusion_projection: true,
             fusion_hidden: None,
+            fusion_residual: false,
             positioning: true,
             swap_mode: true,
             footwork: true,

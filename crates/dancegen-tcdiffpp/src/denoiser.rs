@@ -97,6 +97,9 @@ pub struct GroupDenoiser {
     pub d_model: usize,
     #[module(skip)]
     pub positioning: bool,
+    /// `h + FP(h)` instead of `FP(h)` ([`DenoiserConfig::fusion_residual`]).
+    #[module(skip)]
+    pub fusion_residual: bool,
 }
 
 impl DenoiserConfig {
@@ -142,6 +145,7 @@ impl DenoiserConfig {
             denorm: Denormalize::from_mean_std(mean, std, device),
             d_model: d,
             positioning: self.positioning,
+            fusion_residual: self.fusion_residual,
         }
     }
 }
@@ -239,7 +243,8 @@ impl GroupDenoiser {
             .forward(Tensor::cat(vec![to_tokens(x_t), control], 2));
         let mut h = (h + self.positions(frames, &device)) * mask.clone();
         if let Some(f) = &self.fusion {
-            h = f.forward(h, mask.clone());
+            let fused = f.forward(h.clone(), mask.clone());
+            h = if self.fusion_residual { h + fused } else { fused };
         }
         let time = self
             .time_cond

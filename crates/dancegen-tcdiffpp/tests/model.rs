@@ -131,6 +131,46 @@ fn the_group_is_seen_together() {
 }
 
 #[test]
+fn a_residual_fusion_projection_with_a_silent_mlp_is_the_identity() {
+    // With its last layer zeroed the residual FP adds nothing (the network equals one without
+    // FP), while the released, non-residual FP wipes the tokens: the residual is what carries
+    // x_t past the MLP's hidden width.
+    use dancegen_nn::burn::module::Param;
+    let dev = device::inference();
+    let silent = |residual: bool| {
+        let mut m = net(
+            &DenoiserConfig {
+                fusion_residual: residual,
+                ..tiny(SequenceMixer::CrossAttention)
+            },
+            &dev,
+        );
+        let fp = m.fusion.as_mut().expect("fusion on by default");
+        let w = fp.linear3.weight.val();
+        fp.linear3.weight = Param::from_tensor(w.zeros_like());
+        if let Some(b) = &fp.linear3.bias {
+            fp.linear3.bias = Some(Param::from_tensor(b.val().zeros_like()));
+        }
+        m
+    };
+    let residual = silent(true);
+    let mut without = residual.clone();
+    without.fusion = None;
+    let wiped = silent(false);
+    let c = cond(1, T, 3, &dev);
+    let x = Tensor::<3>::random([1, T, GROUP_DIMS], Distribution::Normal(0.0, 1.0), &dev);
+    let run = |m: &GroupDenoiser, x: Tensor<3>| values(m.forward(x, &[10.0], &c, &[true]));
+    let (a, b) = (run(&residual, x.clone()), run(&without, x.clone()));
+    assert!(a.iter().zip(&b).all(|(p, q)| (p - q).abs() < 1e-5));
+    // The wiped network's output no longer depends on x_t.
+    let y = Tensor::<3>::random([1, T, GROUP_DIMS], Distribution::Normal(0.0, 1.0), &dev);
+    let (p, q) = (run(&wiped, x.clone()), run(&wiped, y.clone()));
+    assert!(p.iter().zip(&q).all(|(u, v)| (u - v).abs() < 1e-5));
+    let (r, s) = (run(&residual, x), run(&residual, y));
+    assert!(r.iter().zip(&s).any(|(u, v)| (u - v).abs() > 1e-3));
+}
+
+#[test]
 fn footwork_adaptor_touches_only_the_lower_body() {
     let dev = device::inference();
     let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
