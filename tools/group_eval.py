@@ -67,6 +67,7 @@ ABLATIONS = [
     ("no_fa", "w/o footwork adaptor", "footwork = false"),
     ("no_dpe", "w/o positioning embedding", "positioning = false"),
     ("no_dl", "w/o distance loss", "[model.loss] distance = 0"),
+    ("fpres", "full system with a residual fusion projection (experiment)", "fusion_residual = true"),
 ]
 
 

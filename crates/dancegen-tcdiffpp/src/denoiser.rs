@@ -244,7 +244,11 @@ impl GroupDenoiser {
         let mut h = (h + self.positions(frames, &device)) * mask.clone();
         if let Some(f) = &self.fusion {
             let fused = f.forward(h.clone(), mask.clone());
-            h = if self.fusion_residual { h + fused } else { fused };
+            h = if self.fusion_residual {
+                h + fused
+            } else {
+                fused
+            };
         }
         let time = self
             .time_cond
