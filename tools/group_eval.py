@@ -311,6 +311,9 @@ def runs(args):
     ablations whose bundles were given."""
     out = [(k, args.model, ctl, smp) for k, _, ctl, smp in CONFIGS
            if not args.only or k in args.only]
+    bad = [a for a in args.ablation if "=" not in a]
+    if bad:
+        raise SystemExit(f"--ablation {bad[0]}: expected KEY=BUNDLE_DIR, e.g. no_fp=target/ablations/no_fp_500")
     given = dict(a.split("=", 1) for a in args.ablation)
     unknown = set(given) - {k for k, _, _ in ABLATIONS}
     if unknown:
