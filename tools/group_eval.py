@@ -686,6 +686,7 @@ def main():
                     help="ablation bundles to add as rows, e.g. no_fp=target/ablations/no_fp")
     args = ap.parse_args()
     GROUP_ARGS[:] = args.group_args.split()
+    runs(args)  # checks --ablation before any work
     started = time.time()
     os.makedirs(args.out, exist_ok=True)
     clips = select_clips(args.dataset, args.per_n, args.out)
