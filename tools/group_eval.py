@@ -630,7 +630,9 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
         if ran:
             L.append("")
         L.append("Not run (no bundle given to the evaluation, so these rows are missing rather "
-                 "than estimated): " + "; ".join(label for label, _ in missing) + ".")
+                 "than estimated): " + "; ".join(label for label, _ in missing) + ". "
+                 "docs/group-ablations.md holds the last measured ablation table and how to "
+                 "make it again.")
     L.append("")
     # targets
     L.append("## Targets (issue #17)")
