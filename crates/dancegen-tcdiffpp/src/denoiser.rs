@@ -293,15 +293,30 @@ pub struct PreparedGroupDenoiser<'a> {
     pub cond: GroupCond,
     pub full: PreparedCond,
     pub null: Option<PreparedCond>,
+    /// Guidance's two branches stacked into one batch of `2B` (conditional first), so a
+    /// guided step is one forward pass ([`Denoiser::predict_x0_guided`]).
+    pub pair: Option<(GroupCond, PreparedCond)>,
 }
 
 impl<'a> PreparedGroupDenoiser<'a> {
     pub fn new(net: &'a GroupDenoiser, cond: GroupCond, guided: bool) -> Self {
         let b = cond.dancers.len();
+        let pair = guided.then(|| {
+            let twice = GroupCond {
+                music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
+                dancers: [cond.dancers.clone(), cond.dancers.clone()].concat(),
+                swap: Tensor::cat(vec![cond.swap.clone(), cond.swap.clone()], 0),
+                control: Tensor::cat(vec![cond.control.clone(), cond.control.clone()], 0),
+            };
+            let keep: Vec<bool> = (0..2 * b).map(|i| i < b).collect();
+            let prepared = net.prepare(&twice, &keep, true);
+            (twice, prepared)
+        });
         Self {
             net,
             full: net.prepare(&cond, &vec![true; b], true),
             null: guided.then(|| net.prepare(&cond, &vec![false; b], true)),
+            pair,
             cond,
         }
     }
@@ -332,5 +347,31 @@ impl Denoiser for PreparedGroupDenoiser<'_> {
             }
         };
         self.net.forward_prepared(x_t, &t, &self.cond, p)
+    }
+
+    fn predict_x0_guided(
+        &self,
+        x_t: Tensor<3>,
+        t: Tensor<1, Int>,
+        cond: &GroupCond,
+    ) -> (Tensor<3>, Tensor<3>) {
+        let Some((twice, prepared)) = &self.pair else {
+            let full = self.predict_x0(x_t.clone(), t.clone(), Conditioning::Full(cond));
+            let null = self.predict_x0(x_t, t, Conditioning::Null);
+            return (full, null);
+        };
+        let b = x_t.dims()[0];
+        let t: Vec<f32> = t
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .expect("timesteps");
+        let both = self.net.forward_prepared(
+            Tensor::cat(vec![x_t.clone(), x_t], 0),
+            &[t.clone(), t].concat(),
+            twice,
+            prepared,
+        );
+        (both.clone().narrow(0, 0, b), both.narrow(0, b, b))
     }
 }

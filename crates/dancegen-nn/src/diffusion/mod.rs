@@ -59,4 +59,19 @@ pub trait Denoiser {
         t: Tensor<1, Int>,
         cond: Conditioning<'_, Self::Cond>,
     ) -> Tensor<3>;
+
+    /// Both branches of classifier-free guidance, `(conditional, unconditional)`. The default
+    /// makes the two calls; a network that can stack the branches into one batch of `2B`
+    /// overrides it, so each step is one pass over the weights with GEMMs twice as tall, which
+    /// is what small batches (LGDS's single window) need.
+    fn predict_x0_guided(
+        &self,
+        x_t: Tensor<3>,
+        t: Tensor<1, Int>,
+        cond: &Self::Cond,
+    ) -> (Tensor<3>, Tensor<3>) {
+        let full = self.predict_x0(x_t.clone(), t.clone(), Conditioning::Full(cond));
+        let null = self.predict_x0(x_t, t, Conditioning::Null);
+        (full, null)
+    }
 }

@@ -346,8 +346,7 @@ fn guided_x0<M: Denoiser>(
         }
         (Some(c), _, None) => model.predict_x0(x, tt(), Conditioning::Full(c)),
         (Some(c), _, Some(w)) => {
-            let pc = model.predict_x0(x.clone(), tt(), Conditioning::Full(c));
-            let pu = model.predict_x0(x, tt(), Conditioning::Null);
+            let (pc, pu) = model.predict_x0_guided(x, tt(), c);
             combine(pc, pu, &w)
         }
     };
