@@ -26,7 +26,7 @@
 
 use dancegen_nn::attention::{AttnMasks, ProjectedKv};
 use dancegen_nn::burn;
-use dancegen_nn::diffusion::{Conditioning, Denoiser};
+use dancegen_nn::diffusion::{Conditioning, Denoiser, separate_guidance_branches};
 use dancegen_nn::edge151::{DIMS, Denormalize};
 use dancegen_nn::pos_encoding::{dancer_positions, sinusoidal};
 use dancegen_nn::timestep::{TimestepMlp, TimestepMlpConfig};
@@ -287,6 +287,14 @@ impl GroupDenoiser {
     }
 }
 
+/// The sampler's integer timesteps as the `f32`s [`GroupDenoiser::forward_prepared`] takes.
+fn host_timesteps(t: Tensor<1, Int>) -> Vec<f32> {
+    t.into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .expect("timesteps convert to f32")
+}
+
 /// The denoiser as the shared sampler sees it, with both branches prepared once per run.
 pub struct PreparedGroupDenoiser<'a> {
     pub net: &'a GroupDenoiser,
@@ -331,11 +339,7 @@ impl Denoiser for PreparedGroupDenoiser<'_> {
         t: Tensor<1, Int>,
         cond: Conditioning<'_, GroupCond>,
     ) -> Tensor<3> {
-        let t: Vec<f32> = t
-            .into_data()
-            .convert::<f32>()
-            .try_to_vec::<f32>()
-            .expect("timesteps");
+        let t = host_timesteps(t);
         let p = match cond {
             Conditioning::Full(_) => &self.full,
             Conditioning::Null => self
@@ -356,16 +360,10 @@ impl Denoiser for PreparedGroupDenoiser<'_> {
         cond: &GroupCond,
     ) -> (Tensor<3>, Tensor<3>) {
         let Some((twice, prepared)) = &self.pair else {
-            let full = self.predict_x0(x_t.clone(), t.clone(), Conditioning::Full(cond));
-            let null = self.predict_x0(x_t, t, Conditioning::Null);
-            return (full, null);
+            return separate_guidance_branches(self, x_t, t, cond);
         };
         let b = x_t.dims()[0];
-        let t: Vec<f32> = t
-            .into_data()
-            .convert::<f32>()
-            .try_to_vec::<f32>()
-            .expect("timesteps");
+        let t = host_timesteps(t);
         let both = self.net.forward_prepared(
             Tensor::cat(vec![x_t.clone(), x_t], 0),
             &[t.clone(), t].concat(),

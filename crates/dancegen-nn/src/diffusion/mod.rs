@@ -70,8 +70,19 @@ pub trait Denoiser {
         t: Tensor<1, Int>,
         cond: &Self::Cond,
     ) -> (Tensor<3>, Tensor<3>) {
-        let full = self.predict_x0(x_t.clone(), t.clone(), Conditioning::Full(cond));
-        let null = self.predict_x0(x_t, t, Conditioning::Null);
-        (full, null)
+        separate_guidance_branches(self, x_t, t, cond)
     }
+}
+
+/// [`Denoiser::predict_x0_guided`] as two calls, one per branch: the default, and the fallback
+/// of an override that cannot stack the branches.
+pub fn separate_guidance_branches<M: Denoiser + ?Sized>(
+    model: &M,
+    x_t: Tensor<3>,
+    t: Tensor<1, Int>,
+    cond: &M::Cond,
+) -> (Tensor<3>, Tensor<3>) {
+    let full = model.predict_x0(x_t.clone(), t.clone(), Conditioning::Full(cond));
+    let null = model.predict_x0(x_t, t, Conditioning::Null);
+    (full, null)
 }
