@@ -9,6 +9,7 @@ mod cmd_features;
 mod cmd_generate;
 mod cmd_models;
 mod cmd_render;
+mod cmd_serve;
 mod cmd_train;
 mod eval;
 mod plot;
@@ -36,6 +37,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Generate(args) => cmd_generate::run(args, cli.quiet),
         cli::Command::Bundle(args) => cmd_bundle::run(args, cli.quiet),
         cli::Command::Models(args) => cmd_models::run(args, cli.quiet),
+        cli::Command::Serve(args) => cmd_serve::run(args, cli.quiet),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -68,7 +70,11 @@ fn init_logging(verbose: u8, quiet: bool) {
     // Decoder libraries warn about harmless oddities (e.g. malformed Vorbis comments); show
     // those only when asked for more output.
     let others = if verbose == 0 { "error" } else { "warn" };
-    let directives = format!("{others},dancegen={ours},dancegen_music={ours},dancegen_io={ours}");
+    // A server's log is its record of jobs: info unless asked to be quiet.
+    let server = if quiet || verbose > 0 { ours } else { "info" };
+    let directives = format!(
+        "{others},dancegen={ours},dancegen_music={ours},dancegen_io={ours},dancegen_server={server}"
+    );
     let filter = tracing_subscriber::EnvFilter::try_from_env("DANCEGEN_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(directives));
     tracing_subscriber::fmt()

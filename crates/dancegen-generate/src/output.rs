@@ -170,15 +170,23 @@ fn select(
     // read the whole group from it.
     let holds_many =
         format.holds_many_dancers() || (dance.group.is_some() && format == OutputFormat::Npy);
-    let chosen: Vec<_> = if holds_many && selection == DancerSelection::Auto {
-        dance.dancers.iter().collect()
-    } else {
-        generated
+    let chosen: Vec<_> = match selection {
+        DancerSelection::Given => dance
+            .dancers
+            .iter()
+            .filter(|d| !d.role.generated())
+            .collect(),
+        DancerSelection::Auto if holds_many => dance.dancers.iter().collect(),
+        _ => generated,
     };
     match chosen.as_slice() {
         [] => Err(GenerateError::Output {
             path: path.to_path_buf(),
-            reason: "the dance has no generated dancer to write".into(),
+            reason: if selection == DancerSelection::Given {
+                "the dance has no given dancer (only a duet has a leader) to write".into()
+            } else {
+                "the dance has no generated dancer to write".into()
+            },
         }),
         [one] => Ok(LoadedMotion::Smpl(one.motion.clone())),
         many if holds_many => Ok(LoadedMotion::Group(

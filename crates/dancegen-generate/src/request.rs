@@ -69,6 +69,9 @@ pub enum DancerSelection {
     Auto,
     /// Only the generated dancers (a duet's follower without its given leader).
     Generated,
+    /// Only the given dancers (a duet's leader, as the dance used it: the danced span at
+    /// 30 fps), so a front end can hand out the leader's joints next to the follower's.
+    Given,
 }
 
 /// One file to write; the format comes from the extension ([`crate::output::OutputFormat`]).

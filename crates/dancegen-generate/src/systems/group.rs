@@ -30,6 +30,10 @@ use crate::song::FPS;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, GroupReport, Role};
 use crate::systems::solo::keep_feet_above_floor;
 
+/// Dancer counts the group model serves (front ends check them before a job starts).
+pub const MIN_DANCERS: usize = N_MIN;
+pub const MAX_DANCERS: usize = N_MAX;
+
 /// Shortest music a group dance is made for (one half window of the model, 2.5 s).
 pub const MIN_GROUP_SECONDS: f64 = 2.5;
 

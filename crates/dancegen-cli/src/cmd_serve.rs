@@ -1,0 +1,62 @@
+//! `dancegen serve`: the web app (`dancegen_server`), started with the flags' settings.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, anyhow, bail};
+use dancegen_generate::models::{data_models_dir, model_kind};
+use dancegen_generate::systems;
+use dancegen_server::{Limits, ServeConfig};
+
+use crate::cli::ServeArgs;
+
+pub fn run(args: &ServeArgs, quiet: bool) -> Result<()> {
+    let data_dir = match &args.data_dir {
+        Some(d) => d.clone(),
+        None => data_models_dir()
+            .and_then(|m| m.parent().map(|p| p.join("serve")))
+            .ok_or_else(|| anyhow!("no data folder on this platform: give --data-dir DIR"))?,
+    };
+    if !(args.max_song_seconds.is_finite() && args.max_song_seconds > 0.0) {
+        bail!(
+            "--max-song-seconds {}: need a positive number",
+            args.max_song_seconds
+        );
+    }
+    if args.max_upload_mb == 0 || args.max_queue == 0 {
+        bail!("--max-upload-mb and --max-queue must be at least 1");
+    }
+    let mut models = Vec::new();
+    for dir in &args.models {
+        let kind = model_kind(dir)
+            .with_context(|| format!("--model {}: no model.toml with a kind", dir.display()))?;
+        let system = systems::by_model_kind(&kind).ok_or_else(|| {
+            anyhow!(
+                "--model {}: kind '{kind}' is no system's model",
+                dir.display()
+            )
+        })?;
+        models.push((system.name.to_string(), PathBuf::from(dir)));
+    }
+    let config = ServeConfig {
+        addr: args.addr,
+        data_dir: data_dir.clone(),
+        workers: usize::from(args.workers),
+        limits: Limits {
+            upload_bytes: args.max_upload_mb << 20,
+            song_seconds: args.max_song_seconds,
+            queue_length: args.max_queue,
+            ..Limits::default()
+        },
+        models,
+    };
+    dancegen_server::run(config, |addr| {
+        if !quiet {
+            // The one line a user needs; stdout, so scripts can read the port when it is 0.
+            println!(
+                "dancegen is serving http://{addr}/ (jobs in {})",
+                data_dir.display()
+            );
+        }
+    })
+    .map_err(|e| anyhow!(e))
+}

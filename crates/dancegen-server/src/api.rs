@@ -1,0 +1,263 @@
+//! The HTTP API: routes, handlers and the limits around them.
+//!
+//! - `POST /api/jobs` (multipart `song`, `leader`, `params`) → `202 {"id"}`
+//! - `GET /api/jobs/{id}` → the job object ([`crate::job::JobView`])
+//! - `GET /api/jobs/{id}/events` → Server-Sent Events, the job object on every change
+//! - `GET /api/jobs/{id}/files/{name}` → a job file, with HTTP Range (the viewer seeks the song)
+//! - `DELETE /api/jobs/{id}` → cancels a queued or running job, removes a finished one
+//! - `GET /api/systems` → the systems, their genres and the limits
+//! - anything else → the embedded viewer ([`crate::web`])
+
+use std::convert::Infallible;
+use std::sync::{Arc, Mutex};
+
+use axum::body::Body;
+use axum::extract::multipart::MultipartRejection;
+use axum::extract::{DefaultBodyLimit, Multipart, Path, Request, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::middleware::{self, Next};
+use axum::response::sse::{Event, KeepAlive, Sse};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::{Json, Router};
+use tokio_stream::StreamExt;
+use tokio_stream::wrappers::WatchStream;
+use tower::ServiceExt;
+use tower_http::services::ServeFile;
+use tower_http::timeout::{RequestBodyDeadlineLayer, TimeoutLayer};
+
+use crate::catalog::Catalog;
+use crate::config::{Limits, SSE_KEEP_ALIVE};
+use crate::error::ApiError;
+use crate::files;
+use crate::jobs::Jobs;
+use crate::upload;
+
+/// What every handler shares.
+#[derive(Clone)]
+pub struct AppState {
+    pub jobs: Arc<Jobs>,
+    pub limits: Limits,
+    pub catalog: Arc<Catalog>,
+    /// Makes "count the queue, then add a job" one step, so the queue limit holds under
+    /// concurrent submissions.
+    pub submit_lock: Arc<Mutex<()>>,
+}
+
+/// Room for the multipart framing and the params part on top of the upload limit.
+const FORM_OVERHEAD: usize = 64 << 10;
+
+pub fn router(state: AppState) -> Router {
+    let limits = state.limits.clone();
+    let upload = Router::new()
+        .route("/api/jobs", post(submit))
+        .layer(DefaultBodyLimit::max(limits.upload_bytes + FORM_OVERHEAD))
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            limits.body_deadline + limits.request_timeout,
+        ))
+        .layer(RequestBodyDeadlineLayer::new(limits.body_deadline));
+    let rest = Router::new()
+        .route("/api/systems", get(systems))
+        .route("/api/jobs/{id}", get(status).delete(delete))
+        .route("/api/jobs/{id}/events", get(events))
+        .route("/api/jobs/{id}/files/{name}", get(file))
+        .route("/api/{*rest}", get(unknown_api))
+        .fallback(crate::web::asset)
+        // Only up to the response headers: an SSE stream lives on after them.
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            limits.request_timeout,
+        ))
+        .layer(DefaultBodyLimit::max(FORM_OVERHEAD));
+    upload
+        .merge(rest)
+        .with_state(state)
+        .layer(middleware::from_fn(json_errors))
+}
+
+/// Errors made by the layers (a timeout, a body over the limit) get the same JSON body as
+/// the handlers' own.
+async fn json_errors(req: Request, next: Next) -> Response {
+    let res = next.run(req).await;
+    let status = res.status();
+    let is_json = res
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .is_some_and(|v| v.as_bytes().starts_with(b"application/json"));
+    if status.is_client_error() && !is_json && status != StatusCode::RANGE_NOT_SATISFIABLE {
+        let words = match status {
+            StatusCode::REQUEST_TIMEOUT => "the request took too long (the upload deadline or \
+                                            the request timeout passed)"
+                .to_string(),
+            StatusCode::PAYLOAD_TOO_LARGE => "the request body is larger than the limit".into(),
+            s => s.canonical_reason().unwrap_or("bad request").to_string(),
+        };
+        return ApiError::new(status, words).into_response();
+    }
+    res
+}
+
+async fn systems(State(s): State<AppState>) -> Json<serde_json::Value> {
+    Json(s.catalog.json(&s.limits))
+}
+
+async fn unknown_api() -> ApiError {
+    ApiError::not_found("no such API route")
+}
+
+async fn submit(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    form: Result<Multipart, MultipartRejection>,
+) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
+    let limit = s.limits.upload_bytes;
+    let declared = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<usize>().ok());
+    if declared.is_some_and(|n| n > limit + FORM_OVERHEAD) {
+        return Err(ApiError::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!(
+                "upload of {:.1} MB is larger than the limit of {} MB",
+                declared.unwrap_or(0) as f64 / (1 << 20) as f64,
+                limit >> 20
+            ),
+        ));
+    }
+    check_queue(&s)?;
+    let form = form.map_err(|e| ApiError::new(e.status(), e.body_text()))?;
+    let up = upload::read(form, limit, s.limits.max_variations).await?;
+    if up.song.bytes.len() > limit {
+        return Err(ApiError::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!("the song is larger than the limit of {} MB", limit >> 20),
+        ));
+    }
+    s.catalog.check(&up.params)?;
+
+    // Files first, in a hidden folder renamed into place, then the row: a crash in between
+    // leaves no half job.
+    let id = s.jobs.new_id();
+    let jobs_dir = files::jobs_dir(s.jobs.data_dir());
+    let incoming = jobs_dir.join(format!(".incoming-{id}"));
+    let song_name = upload::song_file_name(&up.song.name);
+    let leader_name = up
+        .leader
+        .as_ref()
+        .map(|l| upload::leader_file_name(&l.name));
+    let song_bytes: Arc<[u8]> = Arc::from(up.song.bytes);
+    let leader_bytes = up.leader.map(|l| l.bytes);
+    let max_seconds = s.limits.song_seconds;
+    let prepared = {
+        let (incoming, song_name, leader_name, song_bytes) = (
+            incoming.clone(),
+            song_name.clone(),
+            leader_name.clone(),
+            song_bytes.clone(),
+        );
+        tokio::task::spawn_blocking(move || -> Result<(), ApiError> {
+            upload::check_song(&song_name, song_bytes.clone(), max_seconds)?;
+            std::fs::create_dir_all(&incoming)
+                .map_err(|e| ApiError::internal(format!("{}: {e}", incoming.display())))?;
+            let write = |name: &str, bytes: &[u8]| {
+                std::fs::write(incoming.join(name), bytes)
+                    .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))
+            };
+            write(&song_name, &song_bytes)?;
+            if let (Some(name), Some(bytes)) = (&leader_name, &leader_bytes) {
+                write(name, bytes)?;
+                upload::check_leader(&incoming.join(name))?;
+            }
+            Ok(())
+        })
+        .await
+        .map_err(|e| ApiError::internal(format!("checking the upload: {e}")))?
+    };
+    let queued = prepared.and_then(|()| {
+        let _one_at_a_time = s.submit_lock.lock().unwrap_or_else(|e| e.into_inner());
+        check_queue(&s)?;
+        std::fs::rename(&incoming, s.jobs.job_dir(&id))
+            .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))?;
+        s.jobs
+            .store
+            .insert(&id, &up.params, &song_name, leader_name.as_deref())?;
+        Ok(())
+    });
+    if let Err(e) = queued {
+        let _ = std::fs::remove_dir_all(&incoming);
+        let _ = std::fs::remove_dir_all(s.jobs.job_dir(&id));
+        return Err(e);
+    }
+    s.jobs.publish(&id);
+    s.jobs.notify_work();
+    tracing::info!("job {id}: queued ({})", up.params.system);
+    Ok((StatusCode::ACCEPTED, Json(serde_json::json!({ "id": id }))))
+}
+
+fn check_queue(s: &AppState) -> Result<(), ApiError> {
+    let active = s.jobs.store.active_count()?;
+    if active >= s.limits.queue_length {
+        return Err(ApiError::new(
+            StatusCode::TOO_MANY_REQUESTS,
+            format!(
+                "the queue is full ({active} jobs waiting or running, the limit is {}); \
+                 try again when some have finished",
+                s.limits.queue_length
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn no_job(id: &str) -> ApiError {
+    ApiError::not_found(format!("no job {id}"))
+}
+
+async fn status(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<crate::job::JobView>, ApiError> {
+    s.jobs.view(&id)?.map(Json).ok_or_else(|| no_job(&id))
+}
+
+async fn delete(State(s): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    match s.jobs.cancel_or_remove(&id)? {
+        None => Err(no_job(&id)),
+        Some(Some(view)) => Ok((StatusCode::ACCEPTED, Json(view)).into_response()),
+        Some(None) => Ok(StatusCode::NO_CONTENT.into_response()),
+    }
+}
+
+async fn events(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Sse<impl tokio_stream::Stream<Item = Result<Event, Infallible>>>, ApiError> {
+    let rx = s.jobs.subscribe(&id)?.ok_or_else(|| no_job(&id))?;
+    // A watch stream yields the current object first, then every change (intermediate ones
+    // are skipped when the client is slower than the job, which is what a progress bar wants).
+    let stream = WatchStream::new(rx).map(|view| {
+        Ok(Event::default()
+            .json_data(&view)
+            .unwrap_or_else(|_| Event::default().comment("unserialisable job")))
+    });
+    Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(SSE_KEEP_ALIVE)))
+}
+
+async fn file(
+    State(s): State<AppState>,
+    Path((id, name)): Path<(String, String)>,
+    req: Request,
+) -> Result<Response, ApiError> {
+    let not_found = || ApiError::not_found(format!("job {id} has no file '{name}'"));
+    if !files::valid_id(&id) || s.jobs.store.get(&id)?.is_none() {
+        return Err(no_job(&id));
+    }
+    let path = files::resolve(&s.jobs.job_dir(&id), &name).ok_or_else(not_found)?;
+    let res = ServeFile::new(path)
+        .oneshot(req)
+        .await
+        .map_err(|e| ApiError::internal(format!("reading {name}: {e}")))?;
+    Ok(res.map(Body::new))
+}

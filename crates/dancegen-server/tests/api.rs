@@ -1,0 +1,287 @@
+//! The HTTP API over loopback: a server on a free port of 127.0.0.1 with a temporary data
+//! dir, spoken to as a client would. Jobs run the shipped models on the bundled demo song.
+
+mod common;
+
+use std::time::Duration;
+
+use common::{TestServer, demo_song, sse_events, start};
+use dancegen_server::Limits;
+use serde_json::Value;
+
+/// A multipart part: name, file name, bytes.
+type Part<'a> = (&'a str, Option<&'a str>, &'a [u8]);
+
+const JOB_TIMEOUT: Duration = Duration::from_secs(600);
+
+fn error_of(r: &common::Reply) -> String {
+    r.json["error"].as_str().unwrap_or("").to_string()
+}
+
+#[test]
+fn a_solo_job_runs_streams_progress_and_serves_its_files_with_range() {
+    let s = start(Limits::default());
+    let r = s.submit_song(&demo_song(), r#"{"seed": 4, "end": 8, "variations": 2}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+
+    // The stream starts with the current object and follows the job to its end.
+    let events = sse_events(&s.url(&format!("/api/jobs/{id}/events")), 100_000, |v| {
+        v["state"] == "done" || v["state"] == "failed"
+    });
+    let last = events.last().unwrap();
+    assert_eq!(last["state"], "done", "{last}");
+    assert!(events.len() >= 3, "only {} events", events.len());
+    let progress: Vec<f64> = events
+        .iter()
+        .filter(|e| e["state"] == "running")
+        .map(|e| e["progress"].as_f64().unwrap())
+        .collect();
+    assert!(
+        progress.windows(2).all(|w| w[1] >= w[0]),
+        "progress went back: {progress:?}"
+    );
+    assert!(
+        events.iter().any(|e| e["stage"] == "denoising"),
+        "no denoising stage seen"
+    );
+
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["attempts"], 1);
+    let files = job["files"].as_object().unwrap();
+    for name in [
+        "song.ogg",
+        "dance.glb",
+        "dance.bvh",
+        "dance.npz",
+        "dance.npy",
+        "dance.json",
+        "dance-2.glb",
+        "dance-2.npy",
+    ] {
+        assert!(files.contains_key(name), "{name} missing from {files:?}");
+    }
+    let vars = job["variations"].as_array().unwrap();
+    assert_eq!(vars.len(), 2);
+    assert_eq!(
+        (vars[0]["seed"].as_u64(), vars[1]["seed"].as_u64()),
+        (Some(4), Some(5))
+    );
+    assert_ne!(
+        s.download(vars[0]["files"]["npy"].as_str().unwrap()),
+        s.download(vars[1]["files"]["npy"].as_str().unwrap()),
+        "two seeds made the same dance"
+    );
+
+    // The viewer seeks in the song: Range gets 206 with exactly the bytes asked for.
+    let song = std::fs::read(demo_song()).unwrap();
+    let r = s.get_range(job["song"].as_str().unwrap(), "bytes=100-1099");
+    assert_eq!(r.status, 206);
+    assert_eq!(r.bytes, &song[100..1100]);
+    assert_eq!(
+        r.header("content-range"),
+        Some(format!("bytes 100-1099/{}", song.len()).as_str())
+    );
+    assert!(r.header("content-type").unwrap_or("").starts_with("audio/"));
+
+    // Removing a finished job removes it and its files.
+    let folder = s.data.path().join("jobs").join(&id);
+    assert!(folder.join("dance.glb").is_file());
+    assert_eq!(s.delete(&format!("/api/jobs/{id}")).status, 204);
+    assert_eq!(s.get(&format!("/api/jobs/{id}")).status, 404);
+    assert!(!folder.exists());
+}
+
+#[test]
+fn file_names_that_leave_the_job_folder_are_not_found() {
+    let s = start(Limits::default());
+    let r = s.submit_song(&demo_song(), r#"{"end": 3}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap();
+    // Something worth stealing one folder up.
+    std::fs::write(s.data.path().join("jobs").join("secret.txt"), b"secret").unwrap();
+    assert_eq!(s.get(&format!("/api/jobs/{id}/files/song.ogg")).status, 200);
+    for name in [
+        "..%2Fsecret.txt",
+        "%2e%2e%2fsecret.txt",
+        "..%5Csecret.txt",
+        "..",
+        "%2E%2E",
+        ".incoming",
+        "%2Fetc%2Fpasswd",
+        "no-such-file.glb",
+    ] {
+        let r = s.get(&format!("/api/jobs/{id}/files/{name}"));
+        assert_eq!(
+            r.status,
+            404,
+            "{name}: {}",
+            String::from_utf8_lossy(&r.bytes)
+        );
+        assert!(r.json["error"].is_string(), "{name}: not a JSON error");
+    }
+    assert_eq!(
+        s.get(&format!("/api/jobs/{id}/files/../../jobs.sqlite3"))
+            .status,
+        404
+    );
+    assert_eq!(s.get("/api/jobs/..%2F..%2Fetc/files/passwd").status, 404);
+    assert_eq!(s.get("/api/jobs/nosuchjob").status, 404);
+    let _ = s.delete(&format!("/api/jobs/{id}"));
+}
+
+#[test]
+fn limits_and_bad_input_get_clear_json_errors() {
+    let s = start(Limits {
+        upload_bytes: 1 << 20,
+        song_seconds: 30.0,
+        ..Limits::default()
+    });
+    let song = std::fs::read(demo_song()).unwrap(); // 45 s, under 1 MB
+    assert!(song.len() < 1 << 20);
+
+    // 413: an upload over the limit, with a Content-Length and without one.
+    let big = vec![0u8; 3 << 20];
+    let r = s.submit(&[("song", Some("big.wav"), &big)]);
+    assert_eq!(r.status, 413, "{}", r.json);
+    assert!(error_of(&r).contains("limit"), "{}", r.json);
+
+    // 400 naming the field.
+    let cases: [(&str, &[Part], &str); 6] = [
+        (
+            "params",
+            &[("song", Some("a.ogg"), &song), ("params", None, b"{nope")],
+            "params",
+        ),
+        (
+            "steps",
+            &[
+                ("song", Some("a.ogg"), &song),
+                ("params", None, br#"{"steps": -3}"#),
+            ],
+            "steps",
+        ),
+        (
+            "system",
+            &[
+                ("song", Some("a.ogg"), &song),
+                ("params", None, br#"{"system": "ballet"}"#),
+            ],
+            "system",
+        ),
+        (
+            "genre",
+            &[
+                ("song", Some("a.ogg"), &song),
+                ("params", None, br#"{"genre": "polka"}"#),
+            ],
+            "genre",
+        ),
+        ("no song", &[("params", None, b"{}")], "song"),
+        (
+            "duet without a leader",
+            &[
+                ("song", Some("a.ogg"), &song),
+                ("params", None, br#"{"system": "duet"}"#),
+            ],
+            "leader",
+        ),
+    ];
+    for (what, parts, field) in cases {
+        let r = s.submit(parts);
+        assert_eq!(r.status, 400, "{what}: {}", r.json);
+        assert_eq!(r.json["field"], field, "{what}: {}", r.json);
+        assert!(error_of(&r).starts_with(field), "{what}: {}", r.json);
+    }
+
+    // Audio the decoder cannot read: 400 with the decoder's words.
+    let noise: Vec<u8> = (0..50_000u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
+    let r = s.submit(&[("song", Some("song.mp3"), &noise)]);
+    assert_eq!(r.status, 400, "{}", r.json);
+    assert_eq!(r.json["field"], "song");
+    assert!(error_of(&r).contains("cannot read the audio"), "{}", r.json);
+
+    // A song over the duration limit: 400 naming the limit.
+    let r = s.submit_song(&demo_song(), "");
+    assert_eq!(r.status, 400, "{}", r.json);
+    assert!(error_of(&r).contains("30 s"), "{}", r.json);
+    assert!(error_of(&r).contains("duration limit"), "{}", r.json);
+
+    drop(s);
+
+    // 429: a queue that holds one job.
+    let q = start(Limits {
+        queue_length: 1,
+        ..Limits::default()
+    });
+    let first = q.submit_song(&demo_song(), "");
+    assert_eq!(first.status, 202, "{}", first.json);
+    let second = q.submit_song(&demo_song(), "");
+    assert_eq!(second.status, 429, "{}", second.json);
+    assert!(
+        error_of(&second).contains("queue is full"),
+        "{}",
+        second.json
+    );
+    // Cancelling the first frees the queue.
+    let id = first.json["id"].as_str().unwrap();
+    let r = q.delete(&format!("/api/jobs/{id}"));
+    assert_eq!(r.status, 202, "{}", r.json);
+    let job = q.wait(id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "cancelled", "{job}");
+    let third = q.submit_song(&demo_song(), r#"{"end": 3}"#);
+    assert_eq!(third.status, 202, "{}", third.json);
+    let id3 = third.json["id"].as_str().unwrap();
+    assert_eq!(q.wait(id3, JOB_TIMEOUT)["state"], "done");
+}
+
+#[test]
+fn systems_page_and_viewer_are_served() {
+    let s: TestServer = start(Limits::default());
+    let r = s.get("/api/systems");
+    assert_eq!(r.status, 200);
+    let systems = r.json["systems"].as_array().unwrap();
+    let solo = systems.iter().find(|x| x["name"] == "solo").unwrap();
+    assert_eq!(solo["available"], true, "{solo}");
+    assert!(
+        solo["genres"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|g| g == "salsa")
+    );
+    let duet = systems.iter().find(|x| x["name"] == "duet").unwrap();
+    assert_eq!(duet["needs_leader"], true);
+    let group = systems.iter().find(|x| x["name"] == "group").unwrap();
+    assert_eq!(
+        (
+            group["dancers"]["min"].as_u64(),
+            group["dancers"]["max"].as_u64()
+        ),
+        (Some(2), Some(5))
+    );
+    assert_eq!(r.json["limits"]["upload_bytes"], Value::from(64u64 << 20));
+
+    let page = s.get("/");
+    assert_eq!(page.status, 200);
+    assert!(
+        page.header("content-type")
+            .unwrap()
+            .starts_with("text/html")
+    );
+    let html = String::from_utf8(page.bytes).unwrap();
+    assert!(html.contains("importmap"), "the page has no import map");
+    let three = s.get("/vendor/three/three.module.js");
+    assert_eq!(three.status, 200);
+    assert!(
+        three
+            .header("content-type")
+            .unwrap()
+            .starts_with("text/javascript")
+    );
+    assert_eq!(s.get("/vendor/three/LICENSE").status, 200);
+    assert_eq!(s.get("/no-such-page.js").status, 404);
+    assert_eq!(s.get("/api/nothing-here").status, 404);
+}

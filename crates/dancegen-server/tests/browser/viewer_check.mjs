@@ -1,0 +1,148 @@
+#!/usr/bin/env node
+/**
+ * Drives the web viewer of one finished job in headless Chromium and reports what it shows,
+ * for the server's Rust test to check against the job's .npy:
+ *
+ *   node viewer_check.mjs <base_url> <job_id> <out_dir>
+ *
+ * Opens <base_url>/?job=<job_id>, awaits `window.__viewer.ready`, seeks the song to 1, 2 and
+ * 5 s and reads every variation's joint positions, screenshots the viewer at 1 s and 5 s
+ * (<out_dir>/shot_1.png, shot_5.png), plays for about a second, and prints ONE JSON line:
+ *
+ *   {"joints": {"1": [per variation: [dancer][24][x,y,z]], "2": ..., "5": ...},
+ *    "seeked": {"1": {"audio": s, "dance": s}, ...},
+ *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
+ *    "requests": [every URL the page asked for], "errors": [page errors, console errors, HTTP ≥ 400]}
+ *
+ * It asserts nothing (the Rust test does) and exits 0, except when the page never becomes
+ * ready within 60 s: then it exits 1 with the reason and the page's errors on stderr.
+ */
+import { mkdirSync } from 'node:fs';
+import { join } from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
+const READY_TIMEOUT_MS = 60_000;
+const SEEK_TIMES = [1, 2, 5];
+const SHOT_TIMES = [1, 5];
+const PLAY_MS = 1000;
+
+const [baseArg, jobId, outDir] = process.argv.slice(2);
+if (!baseArg || !jobId || !outDir) {
+  console.error('usage: node viewer_check.mjs <base_url> <job_id> <out_dir>');
+  process.exit(2);
+}
+const base = baseArg.replace(/\/+$/, '');
+mkdirSync(outDir, { recursive: true });
+
+const requests = [];
+const errors = [];
+
+/** Rejects after `ms` with `what`, so no step can hang the Rust test. */
+function within(ms, what, promise) {
+  let timer;
+  const timeout = new Promise((_, reject) => {
+    timer = setTimeout(() => reject(new Error(`${what} (no answer within ${ms / 1000} s)`)), ms);
+  });
+  return Promise.race([promise, timeout]).finally(() => clearTimeout(timer));
+}
+
+const browser = await puppeteer.launch({
+  executablePath: CHROMIUM,
+  headless: true,
+  args: [
+    '--no-sandbox',
+    '--autoplay-policy=no-user-gesture-required',
+    '--enable-unsafe-swiftshader',
+    '--use-angle=swiftshader',
+  ],
+});
+
+let exitCode = 0;
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1280, height: 800 });
+  page.on('request', (r) => requests.push(r.url()));
+  page.on('pageerror', (e) => errors.push(`pageerror: ${e?.message ?? e}`));
+  page.on('console', (m) => {
+    if (m.type() === 'error') errors.push(`console: ${m.text()}`);
+  });
+  page.on('response', (r) => {
+    if (r.status() >= 400) errors.push(`HTTP ${r.status()} ${r.url()}`);
+  });
+
+  const url = `${base}/?job=${encodeURIComponent(jobId)}`;
+  const notReady = `the viewer at ${url} did not become ready`;
+  try {
+    await within(READY_TIMEOUT_MS, notReady, (async () => {
+      await page.goto(url, { waitUntil: 'domcontentloaded', timeout: READY_TIMEOUT_MS });
+      await page.waitForFunction(() => window.__viewer !== undefined, { timeout: READY_TIMEOUT_MS });
+      await page.evaluate(() => window.__viewer.ready);
+    })());
+  } catch (e) {
+    // What the page shows the user says most about why (job failed, file missing, ...).
+    const notice = await page.$eval('#notice', (n) => (n.hidden ? '' : n.textContent)).catch(() => '');
+    const status = await page.$eval('#job-status', (n) => (n.closest('[hidden]') ? '' : n.textContent)).catch(() => '');
+    // The page's own rejection (job failed, file missing) without puppeteer's stack lines.
+    const reason = String(e.message).split('\n')[0];
+    console.error(`viewer_check: ${reason.startsWith(notReady) ? reason : `${notReady}: ${reason}`}`);
+    if (notice) console.error(`viewer_check: the page says: ${notice}`);
+    if (status && !notice) console.error(`viewer_check: the job's status on the page: ${status}`);
+    console.error(`viewer_check: page errors: ${JSON.stringify(errors, null, 2)}`);
+    exitCode = 1;
+  }
+
+  if (exitCode === 0) {
+    const result = { joints: {}, seeked: {}, play: null, requests, errors };
+    /** Seeks to `t` (song seconds) and returns {seeked, joints: per variation}. */
+    const seekAndRead = (t) => within(30_000, `seek to ${t} s`, page.evaluate(async (t) => {
+      const v = window.__viewer;
+      const seeked = await v.seek(t);
+      const joints = [];
+      for (let i = 0; i < v.count(); i++) joints.push(v.joints(i));
+      return { seeked, joints };
+    }, t));
+    const step = async (what, fn) => {
+      try { await fn(); } catch (e) { errors.push(`viewer_check: ${what}: ${e.message}`); }
+    };
+
+    for (const t of SEEK_TIMES) {
+      await step(`seek to ${t} s`, async () => {
+        const r = await seekAndRead(t);
+        result.joints[t] = r.joints;
+        result.seeked[t] = r.seeked;
+      });
+    }
+    const viewerBox = await page.$('#viewer');
+    for (const t of SHOT_TIMES) {
+      await step(`screenshot at ${t} s`, async () => {
+        await seekAndRead(t);
+        // Two animation frames, so the composited page holds the frame rendered for `t`.
+        await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+        await viewerBox.screenshot({ path: join(outDir, `shot_${t}.png`) });
+      });
+    }
+    await step('play', async () => {
+      result.play = await within(30_000, 'play for 1 s', page.evaluate(async (ms) => {
+        const v = window.__viewer;
+        const all = () => Array.from({ length: v.count() }, (_, i) => v.joints(i));
+        const before = all();
+        const t0 = v.audio().currentTime;
+        await v.play();
+        await new Promise((r) => setTimeout(r, ms));
+        const t1 = v.audio().currentTime;
+        const after = all();
+        v.audio().pause();
+        let moved = 0;
+        before.forEach((variation, i) => variation.forEach((dancer, d) => dancer.forEach((p, j) => p.forEach((x, k) => {
+          moved = Math.max(moved, Math.abs(x - after[i][d][j][k]));
+        }))));
+        return { t0, t1, moved };
+      }, PLAY_MS));
+    });
+    process.stdout.write(`${JSON.stringify(result)}\n`);
+  }
+} finally {
+  await browser.close().catch(() => {});
+}
+process.exit(exitCode);

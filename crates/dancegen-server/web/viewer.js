@@ -1,0 +1,576 @@
+/**
+ * The dance viewer: one three.js canvas per variation of a finished job, side by side, all
+ * driven by ONE <audio> element playing the job's song.
+ *
+ * The audio element is the only clock. On every animation frame each variation's mixer is set
+ * to `clamp(audio.currentTime - start, 0, clip.duration)` (`start` = the job's `params.start`:
+ * the server cuts nothing, glb time 0 is the song at `start`), so picture and music cannot
+ * drift, and pausing, scrubbing or slowing the song moves the dancers with it.
+ *
+ * GLB layout (crates/dancegen-motion/src/gltf.rs): one skin per dancer whose joint list is the
+ * joint order of the .npy (SMPL 24); one dancer → mesh node `body`, several → mesh nodes
+ * `dancer{d}` with joints `dancer{d}/<joint>`. Node names are not used for joints because
+ * GLTFLoader sanitises them (`/` is dropped); joints are found by glTF node index through the
+ * parser's associations instead.
+ */
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+/** Download-button labels by file kind; unknown kinds show their own name. */
+const FILE_LABELS = {
+  glb: '3D scene (.glb)',
+  bvh: 'BVH',
+  npz: 'SMPL (.npz)',
+  npy: 'Joints (.npy)',
+  json: 'JSON',
+  mp4: 'Video (.mp4)',
+  leader_npy: 'Leader joints (.npy)',
+};
+
+/** How long a seek may take before the song is declared unseekable (e.g. no HTTP Range). */
+const SEEK_TIMEOUT_MS = 10000;
+
+/** Camera field of view, degrees. */
+const FOV = 40;
+
+/** Formats seconds as m:ss.s for the clock. */
+export function formatTime(s) {
+  const t = Math.max(0, s);
+  const m = Math.floor(t / 60);
+  const rest = (t - m * 60).toFixed(1).padStart(4, '0');
+  return `${m}:${rest}`;
+}
+
+/** Download links for one file map (kind or name → URL): known kinds in the order of
+ * `labels` (the 3D scene first), then the rest by name. */
+export function downloadLinks(files, labels = FILE_LABELS) {
+  const known = Object.keys(labels);
+  const rank = (k) => (known.includes(k) ? known.indexOf(k) : known.length);
+  const entries = Object.entries(files ?? {}).sort(([a], [b]) => rank(a) - rank(b) || a.localeCompare(b));
+  const frag = document.createDocumentFragment();
+  for (const [kind, url] of entries) {
+    const a = document.createElement('a');
+    a.className = 'button download';
+    a.href = url;
+    a.download = '';
+    a.textContent = labels[kind] ?? kind;
+    frag.append(a);
+  }
+  return frag;
+}
+
+/**
+ * A floor grid at y = 0 (`size` metres square, a line every `step` metres, the x and z axes
+ * darker). Unlike GridHelper, every line is cut into one segment per cell: a long line that
+ * passes behind the camera is dropped whole by some software renderers (SwiftShader, the
+ * fallback of machines without a GPU), which left the floor without its depth lines.
+ */
+function floorGrid(size, step) {
+  const half = size / 2;
+  const n = Math.round(size / step);
+  const positions = [];
+  const colors = [];
+  const minor = new THREE.Color(0xc9c6bf);
+  const axis = new THREE.Color(0x8c8c8c);
+  for (let i = 0; i <= n; i++) {
+    const a = -half + i * step;
+    const c = Math.abs(a) < 1e-9 ? axis : minor;
+    for (let k = 0; k < n; k++) {
+      const b0 = -half + k * step;
+      const b1 = b0 + step;
+      positions.push(a, 0, b0, a, 0, b1, b0, 0, a, b1, 0, a);
+      for (let v = 0; v < 4; v++) colors.push(c.r, c.g, c.b);
+    }
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.Float32BufferAttribute(positions, 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(colors, 3));
+  return new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
+}
+
+/**
+ * One variation: its canvas, scene, camera, orbit controls, the loaded glb and its mixer, and
+ * the bones of every dancer in .npy joint order.
+ */
+class Stage {
+  constructor(index, variation, parent) {
+    this.index = index;
+    this.variation = variation;
+    this.figure = document.createElement('figure');
+    this.figure.className = 'variation';
+    const caption = document.createElement('figcaption');
+    const title = document.createElement('span');
+    title.className = 'title';
+    title.textContent = `Variation ${index + 1}` + (variation.seed !== undefined ? ` · seed ${variation.seed}` : '');
+    const links = document.createElement('span');
+    links.className = 'downloads';
+    links.append(downloadLinks(variation.files));
+    caption.append(title, links);
+    this.canvasBox = document.createElement('div');
+    this.canvasBox.className = 'canvas-box';
+    this.message = document.createElement('p');
+    this.message.className = 'stage-message';
+    this.message.textContent = 'Loading the 3D dance…';
+    this.canvasBox.append(this.message);
+    this.figure.append(this.canvasBox, caption);
+    parent.append(this.figure);
+
+    this.renderer = new THREE.WebGLRenderer({ antialias: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.renderer.setClearColor(0xf3f1ec);
+    this.canvasBox.prepend(this.renderer.domElement);
+
+    this.scene = new THREE.Scene();
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8070, 2.0));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+    sun.position.set(2, 5, 4);
+    this.scene.add(sun);
+    this.grid = floorGrid(20, 0.5);
+    this.scene.add(this.grid);
+
+    this.camera = new THREE.PerspectiveCamera(FOV, 1, 0.05, 200);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.dancers = [];
+    this.meshes = [];
+    this.clip = null;
+    this.mixer = null;
+    this.action = null;
+    this.helper = null;
+  }
+
+  /** Loads the glb and binds its animation; rejects with a message in words, also shown in
+   * place of the picture. */
+  async load() {
+    try {
+      await this.loadGlb();
+    } catch (e) {
+      this.message.textContent = e.message;
+      this.message.classList.add('failed');
+      throw e;
+    }
+  }
+
+  async loadGlb() {
+    const url = this.variation.files?.glb;
+    const who = `Variation ${this.index + 1}`;
+    if (!url) throw new Error(`${who} has no 3D file (.glb) to show.`);
+    let gltf;
+    try {
+      gltf = await new GLTFLoader().loadAsync(url);
+    } catch (e) {
+      throw new Error(`${who}: the 3D file could not be loaded (${e?.message ?? e}).`);
+    }
+    this.scene.add(gltf.scene);
+    this.root = gltf.scene;
+
+    // glTF node index → the three.js object that represents it in this scene.
+    const byNode = new Map();
+    gltf.scene.traverse((o) => {
+      const a = gltf.parser.associations.get(o);
+      if (a && a.nodes !== undefined && !byNode.has(a.nodes)) byNode.set(a.nodes, o);
+      if (o.isSkinnedMesh) {
+        // Its bounding sphere is the rest pose's; a dancer who travels away from it would be
+        // culled while still in view.
+        o.frustumCulled = false;
+        this.meshes.push(o);
+      }
+    });
+    const json = gltf.parser.json;
+    // Dancer d's skin: the skin of mesh node `dancer{d}` (`body` for a single dancer); files
+    // without those names fall back to skin order, which is the same by construction.
+    const skinOf = [];
+    (json.nodes ?? []).forEach((n) => {
+      if (n.skin === undefined) return;
+      const m = /^dancer(\d+)$/.exec(n.name ?? '');
+      const d = m ? Number(m[1]) : n.name === 'body' ? 0 : null;
+      if (d !== null && skinOf[d] === undefined) skinOf[d] = n.skin;
+    });
+    const skins = json.skins ?? [];
+    const order = skinOf.length === skins.length && !skinOf.includes(undefined) ? skinOf : skins.map((_, i) => i);
+    for (const s of order) {
+      const bones = [];
+      for (const nodeIndex of skins[s].joints) {
+        const bone = byNode.get(nodeIndex) ?? (await gltf.parser.getDependency('node', nodeIndex));
+        bones.push(bone);
+      }
+      this.dancers.push(bones);
+    }
+    if (this.dancers.length === 0) throw new Error(`${who}: the 3D file has no skeleton.`);
+
+    this.clip = gltf.animations[0] ?? null;
+    this.mixer = new THREE.AnimationMixer(gltf.scene);
+    if (this.clip) {
+      // LoopOnce + clamp: time past the end holds the last pose instead of wrapping to 0.
+      this.action = this.mixer.clipAction(this.clip);
+      this.action.setLoop(THREE.LoopOnce, 1);
+      this.action.clampWhenFinished = true;
+      this.action.play();
+    }
+
+    this.helper = new THREE.SkeletonHelper(gltf.scene);
+    this.helper.setColors(new THREE.Color(0x1f1d1a), new THREE.Color(0xc8581f));
+    this.helper.visible = false;
+    this.scene.add(this.helper);
+    this.message.remove();
+    this.frame();
+  }
+
+  /** Length of the dance, seconds. */
+  get duration() {
+    return this.clip ? this.clip.duration : 0;
+  }
+
+  /** Poses every dancer at dance time `t` (seconds from the glb's time 0). */
+  pose(t) {
+    if (!this.action) return;
+    const clamped = Math.min(Math.max(t, 0), this.clip.duration);
+    // A LoopOnce action pauses itself at the end; setTime must be able to go back.
+    this.action.paused = false;
+    this.action.enabled = true;
+    this.mixer.setTime(clamped);
+  }
+
+  /** World positions of every joint: [dancer][joint] = [x, y, z]. */
+  joints() {
+    this.scene.updateMatrixWorld(true);
+    const p = new THREE.Vector3();
+    return this.dancers.map((bones) => bones.map((b) => b.getWorldPosition(p).toArray()));
+  }
+
+  /** Mean world position of the dancers' root joints. */
+  rootCentroid(out = new THREE.Vector3()) {
+    out.set(0, 0, 0);
+    const p = new THREE.Vector3();
+    for (const bones of this.dancers) out.add(bones[0].getWorldPosition(p));
+    return out.divideScalar(Math.max(1, this.dancers.length));
+  }
+
+  /**
+   * Box around every joint over the whole clip (sampled), for framing: dancers who travel
+   * stay in view without the follow camera.
+   */
+  motionBounds() {
+    const box = new THREE.Box3();
+    const p = new THREE.Vector3();
+    const samples = 24;
+    for (let i = 0; i <= samples; i++) {
+      this.pose((this.duration * i) / samples);
+      this.root.updateMatrixWorld(true);
+      for (const bones of this.dancers) for (const b of bones) box.expandByPoint(b.getWorldPosition(p));
+    }
+    this.pose(0);
+    return box;
+  }
+
+  /** Places the camera for a preset so that `box` fills the view, a little from above. */
+  setView(view, box) {
+    const size = box.getSize(new THREE.Vector3()).max(new THREE.Vector3(0.8, 0.8, 0.8));
+    const target = box.getCenter(new THREE.Vector3());
+    // Across and up the picture, and along the line of sight, for each preset.
+    const [across, up, depth] = { side: [size.z, size.y, size.x], top: [size.x, size.z, size.y] }[view]
+      ?? [size.x, size.y, size.z];
+    const tanV = Math.tan(THREE.MathUtils.degToRad(FOV) / 2);
+    const fit = Math.max(up / 2 / tanV, across / 2 / (tanV * this.camera.aspect));
+    const dist = (depth / 2 + fit) * 1.1;
+    const lift = Math.sin(THREE.MathUtils.degToRad(12)) * dist;
+    const flat = Math.cos(THREE.MathUtils.degToRad(12)) * dist;
+    const offset = {
+      side: new THREE.Vector3(flat, lift, 0),
+      // Straight down, nudged so OrbitControls keeps a defined "up".
+      top: new THREE.Vector3(0, dist, 0.001 * dist),
+    }[view] ?? new THREE.Vector3(0, lift, flat);
+    this.controls.target.copy(target);
+    this.camera.position.copy(target).add(offset);
+    this.camera.lookAt(target);
+    this.controls.update();
+  }
+
+  /** Moves camera and target together so the target sits on the dancers' root centroid. */
+  follow() {
+    const c = this.rootCentroid();
+    const delta = c.sub(this.controls.target);
+    if (delta.lengthSq() < 1e-12) return;
+    this.controls.target.add(delta);
+    this.camera.position.add(delta);
+    this.controls.update();
+  }
+
+  /** Resizes the drawing buffer to the box the page gives the canvas. */
+  resize() {
+    const w = Math.max(1, this.canvasBox.clientWidth);
+    const h = Math.max(1, this.canvasBox.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+  }
+
+  frame() {
+    this.renderer.render(this.scene, this.camera);
+  }
+
+  showSkeleton(on) {
+    if (this.helper) this.helper.visible = on;
+    for (const m of this.meshes) m.visible = !on;
+  }
+
+  dispose() {
+    this.renderer.setAnimationLoop(null);
+    this.controls.dispose();
+    this.helper?.dispose();
+    this.renderer.dispose();
+    this.figure.remove();
+  }
+}
+
+/**
+ * The whole viewer for one done job. `root` is the #viewer element of index.html, whose
+ * controls (play, scrub, speed, views, toggles) it wires. `ready` resolves when the song's
+ * metadata and every variation's glb are loaded and rejects with a message in words.
+ */
+export class Viewer {
+  constructor(root, job) {
+    this.root = root;
+    this.start = Number(job.params?.start) || 0;
+    this.el = {
+      play: root.querySelector('#play'),
+      scrub: root.querySelector('#scrub'),
+      clock: root.querySelector('#clock'),
+      box: root.querySelector('#variations-box'),
+      skeleton: root.querySelector('#show-skeleton'),
+      grid: root.querySelector('#show-grid'),
+    };
+    this.audio = document.createElement('audio');
+    this.audio.preload = 'auto';
+    this.audio.className = 'song';
+    root.append(this.audio);
+    this.stages = (job.variations ?? []).map((v, i) => new Stage(i, v, this.el.box));
+    this.root.style.setProperty('--variations', String(Math.max(1, this.stages.length)));
+    this.duration = 0;
+    this.view = 'front';
+    this.following = false;
+    this.dirty = true;
+    this.lastTime = NaN;
+    this.scrubbing = false;
+    this.syncing = false;
+    this.listeners = [];
+
+    if (this.stages.length === 0) {
+      this.ready = Promise.reject(new Error('This job has no dances to show.'));
+    } else {
+      const songReady = this.loadSong(job.song);
+      const glbsReady = Promise.all(this.stages.map((s) => s.load()));
+      this.ready = Promise.all([songReady, glbsReady]).then(() => this.begin());
+    }
+  }
+
+  /** Number of variations. */
+  get count() {
+    return this.stages.length;
+  }
+
+  /** Resolves once the song's length is known; rejects in words if it cannot be played. */
+  loadSong(url) {
+    if (!url) return Promise.reject(new Error('This job has no song to play.'));
+    return new Promise((resolve, reject) => {
+      const a = this.audio;
+      const ok = () => { off(); resolve(); };
+      const bad = () => {
+        off();
+        const code = a.error?.code;
+        const why = code === 4 ? 'this browser cannot play its format'
+          : code === 2 ? 'the network failed while loading it'
+          : code === 3 ? 'it could not be decoded'
+          : a.error?.message || 'unknown reason';
+        reject(new Error(`The song could not be loaded: ${why}.`));
+      };
+      const off = () => { a.removeEventListener('loadedmetadata', ok); a.removeEventListener('error', bad); };
+      a.addEventListener('loadedmetadata', ok);
+      a.addEventListener('error', bad);
+      a.src = url;
+    });
+  }
+
+  /** After everything loaded: frame the dancers, wire the controls, start the frame loop. */
+  async begin() {
+    this.duration = Math.max(...this.stages.map((s) => s.duration));
+    // One framing for all variations, so that side by side they are seen at the same scale.
+    const bounds = new THREE.Box3();
+    for (const s of this.stages) bounds.union(s.motionBounds());
+    for (const s of this.stages) {
+      s.bounds = bounds;
+      s.resize();
+      s.setView('front', s.bounds);
+      s.controls.addEventListener('change', () => this.cameraMoved(s));
+    }
+    this.wireControls();
+    const ro = new ResizeObserver(() => {
+      for (const s of this.stages) s.resize();
+      this.dirty = true;
+    });
+    for (const s of this.stages) ro.observe(s.canvasBox);
+    this.resizeObserver = ro;
+    if (this.start > 0) await this.seek(this.start);
+    // One loop for all canvases: every variation is posed from the same clock reading.
+    this.stages[0].renderer.setAnimationLoop(() => this.tick());
+    this.tick();
+  }
+
+  /**
+   * A user orbited, panned or zoomed in one canvas: the others take the same camera, so the
+   * variations stay comparable. Moves made by the viewer itself (presets, follow) are not
+   * copied, which `syncing` marks.
+   */
+  cameraMoved(source) {
+    this.dirty = true;
+    if (this.syncing) return;
+    this.syncing = true;
+    for (const s of this.stages) {
+      if (s === source) continue;
+      s.camera.position.copy(source.camera.position);
+      s.controls.target.copy(source.controls.target);
+      s.controls.update();
+    }
+    this.syncing = false;
+  }
+
+  /** Dance time now: the song's time minus the dance's start in the song. */
+  danceTime() {
+    return Math.min(Math.max(this.audio.currentTime - this.start, 0), this.duration);
+  }
+
+  /**
+   * One animation frame: pose every variation from the audio clock and render — only when
+   * the time or the view changed, so a paused viewer costs no CPU.
+   */
+  tick(force = false) {
+    const a = this.audio;
+    if (!a.paused && a.currentTime - this.start >= this.duration) {
+      a.pause(); // The dance is over; the rest of the song would show a frozen pose.
+    }
+    const t = this.danceTime();
+    const moved = t !== this.lastTime;
+    if (!(moved || this.dirty || force)) return;
+    for (const s of this.stages) s.pose(t);
+    if (this.following) {
+      this.syncing = true;
+      for (const s of this.stages) { s.root.updateMatrixWorld(true); s.follow(); }
+      this.syncing = false;
+    }
+    for (const s of this.stages) s.frame();
+    if (moved) {
+      this.el.clock.textContent = `${formatTime(t)} / ${formatTime(this.duration)}`;
+      if (!this.scrubbing) this.el.scrub.value = String(this.start + t);
+    }
+    this.lastTime = t;
+    this.dirty = false;
+  }
+
+  /** Seeks the song to `t` (song seconds), waits for the audio to get there, poses, renders. */
+  seek(t) {
+    const a = this.audio;
+    return new Promise((resolve, reject) => {
+      const timer = setTimeout(() => {
+        off();
+        reject(new Error(`Seeking the song to ${t} s did not finish (does the server answer HTTP Range requests?).`));
+      }, SEEK_TIMEOUT_MS);
+      const done = () => {
+        off();
+        this.tick(true);
+        resolve({ audio: a.currentTime, dance: this.danceTime() });
+      };
+      const off = () => { clearTimeout(timer); a.removeEventListener('seeked', done); };
+      a.addEventListener('seeked', done);
+      a.currentTime = t;
+    });
+  }
+
+  /** Plays from where the song is; at the end of the dance it starts again from the top. */
+  play() {
+    const a = this.audio;
+    if (a.currentTime < this.start || a.currentTime - this.start >= this.duration - 1e-3) a.currentTime = this.start;
+    return a.play();
+  }
+
+  /** World joint positions of variation `v`: [dancer][joint][x, y, z]. */
+  joints(v = 0) {
+    const s = this.stages[v];
+    if (!s) throw new Error(`no variation ${v} (there are ${this.stages.length})`);
+    return s.joints();
+  }
+
+  setView(view) {
+    if (view === 'follow') {
+      this.following = !this.following;
+    } else {
+      this.following = false;
+      this.view = view;
+      this.syncing = true;
+      for (const s of this.stages) s.setView(view, s.bounds);
+      this.syncing = false;
+    }
+    for (const b of this.root.querySelectorAll('.view')) {
+      b.setAttribute('aria-pressed', String(b.dataset.view === 'follow' ? this.following : false));
+    }
+    this.dirty = true;
+  }
+
+  /** Wires the buttons of index.html's #viewer to this viewer (undone by dispose). */
+  wireControls() {
+    const on = (target, type, fn) => {
+      target.addEventListener(type, fn);
+      this.listeners.push(() => target.removeEventListener(type, fn));
+    };
+    const { play, scrub } = this.el;
+    const a = this.audio;
+    play.disabled = false;
+    scrub.disabled = false;
+    scrub.min = String(this.start);
+    scrub.max = String(this.start + this.duration);
+    scrub.step = String(1 / 30);
+    on(play, 'click', () => {
+      if (a.paused) this.play().catch((e) => this.onError?.(new Error(`The song cannot play: ${e.message}`)));
+      else a.pause();
+    });
+    const label = () => { play.textContent = a.paused ? 'Play' : 'Pause'; };
+    on(a, 'play', label);
+    on(a, 'pause', label);
+    on(scrub, 'pointerdown', () => { this.scrubbing = true; });
+    on(scrub, 'pointerup', () => { this.scrubbing = false; });
+    on(scrub, 'change', () => { this.scrubbing = false; });
+    on(scrub, 'input', () => { a.currentTime = Number(scrub.value); });
+    for (const b of this.root.querySelectorAll('.speed')) {
+      on(b, 'click', () => {
+        a.playbackRate = Number(b.dataset.rate);
+        for (const o of this.root.querySelectorAll('.speed')) o.setAttribute('aria-pressed', String(o === b));
+      });
+    }
+    for (const b of this.root.querySelectorAll('.view')) on(b, 'click', () => this.setView(b.dataset.view));
+    on(this.el.skeleton, 'change', () => {
+      for (const s of this.stages) s.showSkeleton(this.el.skeleton.checked);
+      this.dirty = true;
+    });
+    on(this.el.grid, 'change', () => {
+      for (const s of this.stages) s.grid.visible = this.el.grid.checked;
+      this.dirty = true;
+    });
+    // Space bar plays and pauses, except while typing or pressing a focused button.
+    on(document, 'keydown', (e) => {
+      if (e.code !== 'Space' || e.target.closest?.('input, select, textarea, button, a')) return;
+      e.preventDefault();
+      play.click();
+    });
+  }
+
+  dispose() {
+    for (const off of this.listeners) off();
+    this.resizeObserver?.disconnect();
+    for (const s of this.stages) s.dispose();
+    this.audio.pause();
+    this.audio.removeAttribute('src');
+    this.audio.load();
+    this.audio.remove();
+    this.el.play.disabled = true;
+    this.el.scrub.disabled = true;
+  }
+}
