@@ -1,0 +1,196 @@
+//! The viewer in a real browser: headless Chromium (Debian's, driven by `puppeteer-core` from
+//! npm through `tests/browser/viewer_check.mjs`) opens a finished job's page from a server on
+//! 127.0.0.1, seeks the song to 1, 2 and 5 s, and the joint world positions read from the
+//! three.js scene must equal the job's `.npy` frames within 1e-5 m — for a solo and for both
+//! dancers of a duet. Playing 1 s must advance the song and the pose, every request must stay
+//! on the host, and the page must log no error.
+//!
+//! Needs `/usr/bin/chromium` and `npm ci` run in `tests/browser` (`tools/test.sh` does both);
+//! the screenshots are kept under the target folder (`viewer-shots/`) for a person to look at.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use common::{TestServer, demo_song, npy_f32, shared, start};
+use dancegen_server::Limits;
+use serde_json::Value;
+
+/// The issue's tolerance between the scene's joints and the `.npy` (metres).
+const TOLERANCE_M: f32 = 1e-5;
+const SEEK_TIMES: [u32; 3] = [1, 2, 5];
+const FPS: u32 = 30;
+const JOB_TIMEOUT: Duration = Duration::from_secs(900);
+
+fn browser_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser")
+}
+
+fn check_prerequisites() {
+    assert!(
+        Path::new("/usr/bin/chromium").exists(),
+        "this test needs Chromium at /usr/bin/chromium (Debian: apt-get install chromium; \
+         tools/test.sh installs it)"
+    );
+    assert!(
+        browser_dir().join("node_modules/puppeteer-core").is_dir(),
+        "this test needs puppeteer-core in {}: run `npm ci --prefix {}` (tools/test.sh does)",
+        browser_dir().display(),
+        browser_dir().display()
+    );
+}
+
+/// The first `seconds` of a BVH (its header and that many frames), as a shorter real take.
+fn trimmed_bvh(path: &Path, seconds: f64) -> Vec<u8> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let (header, motion) = text.split_once("MOTION").unwrap();
+    let mut lines = motion.lines().filter(|l| !l.trim().is_empty());
+    let _frames = lines.next().unwrap();
+    let frame_time_line = lines.next().unwrap();
+    let dt: f64 = frame_time_line
+        .split(':')
+        .nth(1)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    let keep = (seconds / dt).round() as usize;
+    let rows: Vec<&str> = lines.take(keep).collect();
+    let mut out = format!(
+        "{header}MOTION\nFrames: {}\n{frame_time_line}\n",
+        rows.len()
+    );
+    for r in rows {
+        out.push_str(r);
+        out.push('\n');
+    }
+    out.into_bytes()
+}
+
+/// Runs the browser driver on job `id`; its JSON report.
+fn view(s: &TestServer, id: &str, name: &str) -> Value {
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("viewer-shots")
+        .join(name);
+    let out = Command::new("node")
+        .arg(browser_dir().join("viewer_check.mjs"))
+        .arg(s.server.url())
+        .arg(id)
+        .arg(&shots)
+        .output()
+        .expect("this test needs node (Node.js) on the PATH");
+    assert!(
+        out.status.success(),
+        "viewer_check failed for the {name} job:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "viewer_check printed no JSON ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    });
+    let a = std::fs::read(shots.join("shot_1.png")).expect("screenshot at 1 s");
+    let b = std::fs::read(shots.join("shot_5.png")).expect("screenshot at 5 s");
+    assert_ne!(a, b, "{name}: the screenshots at 1 s and 5 s are the same");
+    println!("{name}: screenshots in {}", shots.display());
+    report
+}
+
+/// Largest distance between the scene's joints of one dancer at `t` and frame `t·30` of a
+/// `(T, 24, 3)` `.npy`.
+fn max_error(scene: &Value, npy: &(Vec<usize>, Vec<f32>), t: u32) -> f32 {
+    let (shape, data) = npy;
+    assert_eq!(&shape[1..], &[24, 3], "npy shape {shape:?}");
+    let frame = (t * FPS) as usize;
+    assert!(
+        frame < shape[0],
+        "frame {frame} beyond the npy's {}",
+        shape[0]
+    );
+    let joints = scene.as_array().expect("joints of a dancer");
+    assert_eq!(joints.len(), 24);
+    let mut worst = 0f32;
+    for (j, p) in joints.iter().enumerate() {
+        for k in 0..3 {
+            let x = p[k].as_f64().unwrap() as f32;
+            worst = worst.max((x - data[(frame * 24 + j) * 3 + k]).abs());
+        }
+    }
+    worst
+}
+
+/// What every page must satisfy: no error, every request to the server's own host, and
+/// playing moves the song and the dancers.
+fn check_page(report: &Value, base: &str, name: &str) {
+    let errors = report["errors"].as_array().unwrap();
+    assert!(errors.is_empty(), "{name}: page errors {errors:?}");
+    for url in report["requests"].as_array().unwrap() {
+        let url = url.as_str().unwrap();
+        assert!(
+            url.starts_with(&format!("{base}/")) || url.starts_with("data:"),
+            "{name}: a request left the host: {url}"
+        );
+    }
+    let play = &report["play"];
+    let (t0, t1) = (play["t0"].as_f64().unwrap(), play["t1"].as_f64().unwrap());
+    assert!(
+        t1 > t0 + 0.3,
+        "{name}: 1 s of play moved the song from {t0} to {t1}"
+    );
+    assert!(
+        play["moved"].as_f64().unwrap() > 1e-3,
+        "{name}: the dancers did not move while playing: {play}"
+    );
+}
+
+#[test]
+fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let base = s.server.url();
+
+    let solo = s.submit_song(&demo_song(), r#"{"seed": 2, "end": 8}"#);
+    assert_eq!(solo.status, 202, "{}", solo.json);
+    let song = std::fs::read(demo_song()).unwrap();
+    let leader = trimmed_bvh(&shared().join("data/cmu-salsa/61_13_scaled.bvh"), 7.0);
+    let duet = s.submit(&[
+        ("song", Some("demo.ogg"), &song),
+        ("leader", Some("61_13_first_7s.bvh"), &leader),
+        ("params", None, br#"{"system": "duet", "seed": 1}"#),
+    ]);
+    assert_eq!(duet.status, 202, "{}", duet.json);
+
+    for (reply, name) in [(&solo, "solo"), (&duet, "duet")] {
+        let id = reply.json["id"].as_str().unwrap();
+        let job = s.wait(id, JOB_TIMEOUT);
+        assert_eq!(job["state"], "done", "{name}: {job}");
+        let files = &job["variations"][0]["files"];
+        let report = view(&s, id, name);
+        check_page(&report, &base, name);
+        // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
+        let mut expected = Vec::new();
+        if name == "duet" {
+            expected.push(npy_f32(&s.download(files["leader_npy"].as_str().unwrap())));
+        }
+        expected.push(npy_f32(&s.download(files["npy"].as_str().unwrap())));
+        for t in SEEK_TIMES {
+            let dancers = report["joints"][t.to_string()][0].as_array().unwrap();
+            assert_eq!(
+                dancers.len(),
+                expected.len(),
+                "{name}: dancers in the scene"
+            );
+            for (d, npy) in expected.iter().enumerate() {
+                let err = max_error(&dancers[d], npy, t);
+                println!("{name} dancer {d} at {t} s: max joint error {err:.2e} m");
+                assert!(
+                    err <= TOLERANCE_M,
+                    "{name} dancer {d} at {t} s: the scene is {err} m from the npy"
+                );
+            }
+        }
+    }
+}
