@@ -5,9 +5,11 @@
 # The tests need, beyond Rust:
 #   - libsoxr-dev + pkg-config: the music crate links libsoxr (librosa's resampler);
 #   - ffmpeg: MP4 previews;
-#   - chromium: a written .glb is opened with three.js in headless Chromium;
+#   - chromium: a written .glb is opened with three.js in headless Chromium, and the web app's
+#     viewer is checked in it (`dancegen serve`);
 #   - node + npm: the Khronos glTF validator and three.js, installed from the npm registry by
-#     the tests themselves into cargo's target directory (pinned versions);
+#     the tests themselves into cargo's target directory (pinned versions), and puppeteer-core
+#     (drives Chromium; never downloads a browser), installed below from its lock file;
 #   - ../shared next to the checkout: golden fixtures and real songs and motion.
 # Missing Debian packages are installed with apt-get (as root, or through sudo); without
 # either the script names them and stops.
@@ -42,5 +44,12 @@ if [ ! -d ../shared/fixtures ]; then
   echo "tools/test.sh: the tests read ../shared (fixtures, real data) next to this checkout;" \
     "$(cd .. && pwd)/shared is missing" >&2
   exit 1
+fi
+# The web app's browser test drives Chromium with puppeteer-core, pinned by the lock file.
+browser=crates/dancegen-server/tests/browser
+if [ ! -d "$browser/node_modules/puppeteer-core" ] ||
+  [ "$browser/package-lock.json" -nt "$browser/node_modules/.package-lock.json" ]; then
+  echo "tools/test.sh: installing the browser test's npm packages ($browser)" >&2
+  npm ci --prefix "$browser" --no-audit --no-fund --silent
 fi
 exec cargo test --workspace --locked "$@"

@@ -190,9 +190,9 @@ async fn submit(
         let _ = std::fs::remove_dir_all(s.jobs.job_dir(&id));
         return Err(e);
     }
+    tracing::info!("job {id}: queued ({})", up.params.system);
     s.jobs.publish(&id);
     s.jobs.notify_work();
-    tracing::info!("job {id}: queued ({})", up.params.system);
     Ok((StatusCode::ACCEPTED, Json(serde_json::json!({ "id": id }))))
 }
 

@@ -295,6 +295,8 @@ pub struct JobView {
     pub finished: Option<f64>,
     /// Times a worker started the job (more than 1 only when a server stopped during it).
     pub attempts: u32,
+    /// Queued jobs ahead of this one (0 = next), while it waits.
+    pub queue_position: Option<usize>,
 }
 
 /// The stem of variation `k`'s files: `dance` (what the CLI's examples write), then

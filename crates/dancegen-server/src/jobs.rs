@@ -125,6 +125,10 @@ impl Jobs {
             created: row.created,
             finished: row.finished,
             attempts: row.attempts,
+            queue_position: match row.state {
+                JobState::Queued => self.store.queue_position(&row.id).ok().flatten(),
+                _ => None,
+            },
         }
     }
 
@@ -197,6 +201,14 @@ impl Jobs {
             None => {
                 live.insert(id.to_string(), watch::channel(view).0);
             }
+        }
+    }
+
+    /// Re-publishes every queued job (their places in the queue moved up).
+    pub fn publish_queue(&self) {
+        match self.store.ids_in(JobState::Queued) {
+            Ok(ids) => ids.iter().for_each(|id| self.publish(id)),
+            Err(e) => tracing::error!("job database: {e}"),
         }
     }
 

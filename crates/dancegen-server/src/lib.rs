@@ -14,6 +14,7 @@
 
 pub mod api;
 pub mod catalog;
+pub mod client;
 pub mod config;
 pub mod error;
 pub mod files;

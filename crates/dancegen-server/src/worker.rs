@@ -95,6 +95,7 @@ fn run_job(
     let id = row.id.as_str();
     let cancel = jobs.cancel_token(id);
     jobs.publish(id);
+    jobs.publish_queue();
     tracing::info!("job {id}: {} started", row.params.system);
     let started = Instant::now();
     let result = generate(jobs, generator, models, row, &cancel);

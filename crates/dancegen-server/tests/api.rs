@@ -5,16 +5,14 @@ mod common;
 
 use std::time::Duration;
 
-use common::{TestServer, demo_song, sse_events, start};
+use common::{TestServer, demo_song, start};
 use dancegen_server::Limits;
+use dancegen_server::client::{Part, Reply};
 use serde_json::Value;
-
-/// A multipart part: name, file name, bytes.
-type Part<'a> = (&'a str, Option<&'a str>, &'a [u8]);
 
 const JOB_TIMEOUT: Duration = Duration::from_secs(600);
 
-fn error_of(r: &common::Reply) -> String {
+fn error_of(r: &Reply) -> String {
     r.json["error"].as_str().unwrap_or("").to_string()
 }
 
@@ -26,7 +24,7 @@ fn a_solo_job_runs_streams_progress_and_serves_its_files_with_range() {
     let id = r.json["id"].as_str().unwrap().to_string();
 
     // The stream starts with the current object and follows the job to its end.
-    let events = sse_events(&s.url(&format!("/api/jobs/{id}/events")), 100_000, |v| {
+    let events = s.events(&format!("/api/jobs/{id}/events"), |v| {
         v["state"] == "done" || v["state"] == "failed"
     });
     let last = events.last().unwrap();
