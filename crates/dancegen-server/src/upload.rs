@@ -28,9 +28,34 @@ pub struct UploadedFile {
     pub bytes: Vec<u8>,
 }
 
+/// Whether the body deadline ([`tower_http::timeout::RequestBodyDeadlineLayer`]) cut the
+/// upload off.
+fn hit_deadline(e: &MultipartError) -> bool {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(s) = source {
+        if s.is::<tower_http::timeout::TimeoutError>() {
+            return true;
+        }
+        source = s.source();
+    }
+    false
+}
+
 fn multipart_error(e: MultipartError, limit: usize) -> ApiError {
     let status = e.status();
-    if status == StatusCode::PAYLOAD_TOO_LARGE {
+    if hit_deadline(&e) {
+        ApiError::new(
+            StatusCode::REQUEST_TIMEOUT,
+            "the upload took longer than the upload deadline; try again on a faster link or \
+             with a compressed song",
+        )
+    } else if status.is_server_error() {
+        // The body stream broke: the client went away or sent a broken stream.
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            format!("the upload was interrupted: {}", e.body_text()),
+        )
+    } else if status == StatusCode::PAYLOAD_TOO_LARGE {
         ApiError::new(
             status,
             format!(

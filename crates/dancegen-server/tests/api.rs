@@ -229,10 +229,44 @@ fn limits_and_bad_input_get_clear_json_errors() {
     assert_eq!(r.status, 202, "{}", r.json);
     let job = q.wait(id, JOB_TIMEOUT);
     assert_eq!(job["state"], "cancelled", "{job}");
-    let third = q.submit_song(&demo_song(), r#"{"end": 3}"#);
+    let third = q.submit_song(&demo_song(), r#"{"end": 3, "mp4": true}"#);
     assert_eq!(third.status, 202, "{}", third.json);
     let id3 = third.json["id"].as_str().unwrap();
-    assert_eq!(q.wait(id3, JOB_TIMEOUT)["state"], "done");
+    let job = q.wait(id3, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    assert!(
+        job["variations"][0]["files"]["mp4"].is_string(),
+        "asked for an MP4: {job}"
+    );
+}
+
+#[test]
+fn a_slow_upload_is_cut_off_at_the_body_deadline() {
+    use std::io::{Read, Write};
+    let s = start(Limits {
+        body_deadline: Duration::from_secs(1),
+        ..Limits::default()
+    });
+    let mut tcp = std::net::TcpStream::connect(s.server.addr).unwrap();
+    tcp.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    // A client that promises 100 kB and sends a few bytes, then stalls.
+    write!(
+        tcp,
+        "POST /api/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; \
+         boundary=b\r\nContent-Length: 100000\r\n\r\n--b\r\nContent-Disposition: form-data; \
+         name=\"song\"; filename=\"a.ogg\"\r\n\r\nOggS"
+    )
+    .unwrap();
+    let t = std::time::Instant::now();
+    let mut reply = Vec::new();
+    let _ = tcp.read_to_end(&mut reply);
+    let reply = String::from_utf8_lossy(&reply);
+    assert!(
+        t.elapsed() < Duration::from_secs(20),
+        "not cut off: {reply}"
+    );
+    assert!(reply.starts_with("HTTP/1.1 408"), "{reply}");
+    assert!(reply.contains("\"error\""), "not a JSON error: {reply}");
 }
 
 #[test]
