@@ -101,6 +101,14 @@ impl Jobs {
                     by_kind.insert(ext.to_string(), u.clone());
                 }
             }
+            // A group's single-dancer formats come one file per dancer (`dance_0.bvh`, …).
+            for ext in ["bvh", "npz"] {
+                for d in 0..row.params.dancer_count() {
+                    if let Some(u) = files.get(&format!("{stem}_{d}.{ext}")) {
+                        by_kind.insert(format!("{ext}_{d}"), u.clone());
+                    }
+                }
+            }
             if let Some(u) = files.get(LEADER_NPY) {
                 by_kind.insert("leader_npy".into(), u.clone());
             }

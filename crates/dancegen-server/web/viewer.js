@@ -42,6 +42,12 @@ export function formatTime(s) {
   return `${m}:${rest}`;
 }
 
+/** A group's per-dancer file (`bvh_0`, `npz_2`: one file per dancer) as "BVH · dancer 1". */
+function dancerLabel(kind, labels) {
+  const m = /^([a-z0-9]+)_(\d+)$/.exec(kind);
+  return m && labels[m[1]] ? `${labels[m[1]]} · dancer ${Number(m[2]) + 1}` : null;
+}
+
 /** Download links for one file map (kind or name → URL): known kinds in the order of
  * `labels` (the 3D scene first), then the rest by name. */
 export function downloadLinks(files, labels = FILE_LABELS) {
@@ -54,7 +60,7 @@ export function downloadLinks(files, labels = FILE_LABELS) {
     a.className = 'button download';
     a.href = url;
     a.download = '';
-    a.textContent = labels[kind] ?? kind;
+    a.textContent = labels[kind] ?? dancerLabel(kind, labels) ?? kind;
     frag.append(a);
   }
   return frag;

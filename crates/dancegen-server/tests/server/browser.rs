@@ -8,13 +8,11 @@
 //! Needs `/usr/bin/chromium` and `npm ci` run in `tests/browser` (`tools/test.sh` does both);
 //! the screenshots are kept under the target folder (`viewer-shots/`) for a person to look at.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use common::{TestServer, demo_song, npy_f32, shared, start};
+use crate::common::{TestServer, demo_song, npy_f32, shared, start};
 use dancegen_server::Limits;
 use serde_json::Value;
 

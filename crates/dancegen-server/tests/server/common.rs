@@ -1,8 +1,6 @@
 //! What the server tests share: a server on a free loopback port over a temporary data dir,
 //! the API client (checked replies), the demo song, `.npy` reading.
 
-#![allow(dead_code)]
-
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 

@@ -1,11 +1,9 @@
 //! The HTTP API over loopback: a server on a free port of 127.0.0.1 with a temporary data
 //! dir, spoken to as a client would. Jobs run the shipped models on the bundled demo song.
 
-mod common;
-
 use std::time::Duration;
 
-use common::{TestServer, demo_song, start};
+use crate::common::{TestServer, demo_song, start};
 use dancegen_server::Limits;
 use dancegen_server::client::{Part, Reply};
 use serde_json::Value;
