@@ -39,10 +39,6 @@ pub fn start(limits: Limits) -> TestServer {
 
 /// The client's calls, with transport errors as test failures.
 impl TestServer {
-    pub fn url(&self, path: &str) -> String {
-        self.client.url(path)
-    }
-
     pub fn get(&self, path: &str) -> Reply {
         self.client.get(path).unwrap()
     }
