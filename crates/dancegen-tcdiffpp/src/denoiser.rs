@@ -306,10 +306,18 @@ pub struct PreparedGroupDenoiser<'a> {
     pub pair: Option<(GroupCond, PreparedCond)>,
 }
 
+/// Largest batch whose guidance branches are stacked into one pass. Stacking pays where the
+/// batch is small (LGDS denoises one window at a time: the GEMMs get twice as tall and the
+/// weights are read once); the parallel sampler's batch of every window is already tall.
+/// Doubling it measured 13.9 s against 13.2 s with two calls (`bench/group.sh`,
+/// parallel_5x1800f, medians of 3 rounds on 2 cores: within the run-to-run spread, so this
+/// only keeps the two-call path where stacking buys nothing).
+pub const STACK_GUIDANCE_MAX_BATCH: usize = 4;
+
 impl<'a> PreparedGroupDenoiser<'a> {
     pub fn new(net: &'a GroupDenoiser, cond: GroupCond, guided: bool) -> Self {
         let b = cond.dancers.len();
-        let pair = guided.then(|| {
+        let pair = (guided && b <= STACK_GUIDANCE_MAX_BATCH).then(|| {
             let twice = GroupCond {
                 music: Tensor::cat(vec![cond.music.clone(), cond.music.clone()], 0),
                 dancers: [cond.dancers.clone(), cond.dancers.clone()].concat(),
