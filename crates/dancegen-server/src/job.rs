@@ -84,16 +84,34 @@ impl JobParams {
     /// Parses and checks `params` (a JSON object; empty text = every default). `max_variations`
     /// bounds `variations`.
     pub fn parse(text: &str, max_variations: usize) -> Result<Self, ApiError> {
-        let text = text.trim();
-        let obj: Map<String, Value> = if text.is_empty() {
-            Map::new()
-        } else {
-            match serde_json::from_str::<Value>(text) {
-                Ok(Value::Object(o)) => o,
-                Ok(_) => return Err(ApiError::field("params", "must be a JSON object")),
-                Err(e) => return Err(ApiError::field("params", format!("not valid JSON: {e}"))),
+        Self::from_object(object_of(text)?, max_variations)
+    }
+
+    /// Parses `params` plus any parameter sent as a form field of its own (`seed=3`, as an
+    /// HTML form sends it); one given both ways is an error.
+    pub fn parse_form(
+        text: &str,
+        fields: &[(String, String)],
+        max_variations: usize,
+    ) -> Result<Self, ApiError> {
+        let mut obj = object_of(text)?;
+        for (k, v) in fields {
+            if obj.insert(k.clone(), Value::String(v.clone())).is_some() {
+                return Err(ApiError::field(
+                    k,
+                    format!("'{k}' is given twice (in params and as a form field)"),
+                ));
             }
-        };
+        }
+        Self::from_object(obj, max_variations)
+    }
+
+    /// Whether `name` is a parameter (a form field of that name joins `params`).
+    pub fn is_field(name: &str) -> bool {
+        FIELDS.split(", ").any(|f| f == name)
+    }
+
+    fn from_object(obj: Map<String, Value>, max_variations: usize) -> Result<Self, ApiError> {
         if let Some(k) = obj
             .keys()
             .find(|k| !FIELDS.split(", ").any(|f| f == k.as_str()))
@@ -184,6 +202,9 @@ impl JobParams {
         let mp4 = match obj.get("mp4") {
             None | Some(Value::Null) => false,
             Some(Value::Bool(b)) => *b,
+            // Form fields arrive as text (a checkbox sends "on").
+            Some(Value::String(t)) if ["true", "on", "1"].contains(&t.trim()) => true,
+            Some(Value::String(t)) if ["false", "off", "0", ""].contains(&t.trim()) => false,
             Some(v) => return Err(ApiError::field("mp4", format!("{v}: need true or false"))),
         };
         Ok(JobParams {
@@ -211,6 +232,19 @@ impl JobParams {
     /// The seed of variation `k`.
     pub fn seed_of(&self, k: usize) -> u64 {
         self.seed.wrapping_add(k as u64)
+    }
+}
+
+/// `params` as a JSON object (empty text = no parameter).
+fn object_of(text: &str) -> Result<Map<String, Value>, ApiError> {
+    let text = text.trim();
+    if text.is_empty() {
+        return Ok(Map::new());
+    }
+    match serde_json::from_str::<Value>(text) {
+        Ok(Value::Object(o)) => Ok(o),
+        Ok(_) => Err(ApiError::field("params", "must be a JSON object")),
+        Err(e) => Err(ApiError::field("params", format!("not valid JSON: {e}"))),
     }
 }
 
@@ -368,5 +402,16 @@ mod tests {
             Some("genre")
         );
         assert!(err(r#"{"system":"ballet"}"#).message.contains("solo"));
+    }
+
+    #[test]
+    fn form_fields_join_params() {
+        let f = |k: &str, v: &str| (k.to_string(), v.to_string());
+        let p =
+            JobParams::parse_form(r#"{"seed": 3}"#, &[f("end", "8"), f("mp4", "on")], 4).unwrap();
+        assert_eq!((p.seed, p.end, p.mp4), (3, Some(8.0), true));
+        let e = JobParams::parse_form(r#"{"seed": 3}"#, &[f("seed", "4")], 4).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("seed"));
+        assert!(JobParams::is_field("variations") && !JobParams::is_field("song"));
     }
 }

@@ -77,6 +77,7 @@ pub async fn read(
     let mut song = None;
     let mut leader = None;
     let mut params_text = None;
+    let mut form_fields = Vec::new();
     while let Some(field) = form
         .next_field()
         .await
@@ -107,15 +108,29 @@ pub async fn read(
                     .map_err(|e| multipart_error(e, upload_limit))?;
                 params_text = Some(text);
             }
+            other if JobParams::is_field(other) => {
+                let text = field
+                    .text()
+                    .await
+                    .map_err(|e| multipart_error(e, upload_limit))?;
+                form_fields.push((other.to_string(), text));
+            }
             other => {
                 return Err(ApiError::field(
                     other,
-                    format!("unknown part '{other}' (send song, leader and params)"),
+                    format!(
+                        "unknown part '{other}' (send song, leader and params, or the \
+                         parameters as form fields)"
+                    ),
                 ));
             }
         }
     }
-    let params = JobParams::parse(params_text.as_deref().unwrap_or(""), max_variations)?;
+    let params = JobParams::parse_form(
+        params_text.as_deref().unwrap_or(""),
+        &form_fields,
+        max_variations,
+    )?;
     let song = song.ok_or_else(|| ApiError::field("song", "missing: attach the song file"))?;
     if song.bytes.is_empty() {
         return Err(ApiError::field("song", "the file is empty"));

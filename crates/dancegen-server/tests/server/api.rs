@@ -136,8 +136,20 @@ fn limits_and_bad_input_get_clear_json_errors() {
     let song = std::fs::read(demo_song()).unwrap(); // 45 s, under 1 MB
     assert!(song.len() < 1 << 20);
 
-    // 413: an upload over the limit, with a Content-Length and without one.
-    let big = vec![0u8; 3 << 20];
+    // 413 on the declared length, before the body is read: the client sends only the headers
+    // (a client that keeps writing a refused body may see the connection close under it).
+    let reply = raw_exchange(
+        s.server.addr,
+        "POST /api/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: multipart/form-data; \
+         boundary=b\r\nContent-Length: 3145728\r\n\r\n",
+    );
+    assert!(reply.starts_with("HTTP/1.1 413"), "{reply}");
+    assert!(
+        reply.contains("\"error\"") && reply.contains("limit"),
+        "{reply}"
+    );
+    // 413 on a song over the limit inside a body the server reads whole.
+    let big = vec![0u8; (1 << 20) + 1];
     let r = s.submit(&[("song", Some("big.wav"), &big)]);
     assert_eq!(r.status, 413, "{}", r.json);
     assert!(error_of(&r).contains("limit"), "{}", r.json);
@@ -236,6 +248,17 @@ fn limits_and_bad_input_get_clear_json_errors() {
         job["variations"][0]["files"]["mp4"].is_string(),
         "asked for an MP4: {job}"
     );
+}
+
+/// Sends `request` as is on a new connection and returns everything the server answers.
+fn raw_exchange(addr: std::net::SocketAddr, request: &str) -> String {
+    use std::io::{Read, Write};
+    let mut tcp = std::net::TcpStream::connect(addr).unwrap();
+    tcp.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    tcp.write_all(request.as_bytes()).unwrap();
+    let mut reply = Vec::new();
+    let _ = tcp.read_to_end(&mut reply);
+    String::from_utf8_lossy(&reply).into_owned()
 }
 
 #[test]
