@@ -5,8 +5,9 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// Largest upload (song + leader + params) in bytes: 64 MiB holds a 10-minute WAV at 44.1 kHz
-/// stereo 16-bit (≈ 106 MB would not; such songs should come compressed).
+/// Largest upload (song + leader + params) in bytes, the 64 MB: a 10-minute song fits
+/// compressed (OGG/MP3, ~10 MB) or as a mono 16-bit 22.05 kHz WAV (26 MB), not as a
+/// CD-quality stereo WAV (106 MB).
 pub const DEFAULT_UPLOAD_BYTES: usize = 64 << 20;
 /// Longest song accepted, seconds (10 minutes).
 pub const DEFAULT_SONG_SECONDS: f64 = 600.0;

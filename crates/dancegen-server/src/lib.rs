@@ -60,7 +60,7 @@ fn start_app(config: &ServeConfig) -> Result<(AppState, Workers), String> {
                 .map(|d| (s.name.to_string(), d.clone()))
         })
         .collect();
-    let workers = Workers::start(config.workers, jobs.clone(), generator, models);
+    let workers = Workers::start(config.workers, jobs.clone(), generator, models)?;
     let state = AppState {
         jobs,
         limits: config.limits.clone(),
@@ -197,6 +197,7 @@ pub fn spawn(config: ServeConfig) -> Result<RunningServer, String> {
                 Ok(rt) => rt,
                 Err(e) => {
                     let _ = ready_tx.send(Err(format!("starting the async runtime: {e}")));
+                    workers.stop(&jobs);
                     return;
                 }
             };

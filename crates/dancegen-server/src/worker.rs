@@ -40,23 +40,31 @@ impl Workers {
         jobs: Arc<Jobs>,
         generator: Arc<Generator>,
         models: Vec<(String, PathBuf)>,
-    ) -> Self {
+    ) -> Result<Self, String> {
         let stop = Arc::new(AtomicBool::new(false));
-        let threads = (0..n.max(1))
-            .map(|i| {
-                let (jobs, generator, stop, models) = (
-                    jobs.clone(),
-                    generator.clone(),
-                    stop.clone(),
-                    models.clone(),
-                );
-                std::thread::Builder::new()
-                    .name(format!("dancegen-worker-{i}"))
-                    .spawn(move || work(&jobs, &generator, &stop, &models))
-                    .expect("spawning a worker thread")
-            })
-            .collect();
-        Workers { stop, threads }
+        let mut workers = Workers {
+            stop: stop.clone(),
+            threads: Vec::new(),
+        };
+        for i in 0..n.max(1) {
+            let (j, generator, stop, models) = (
+                jobs.clone(),
+                generator.clone(),
+                stop.clone(),
+                models.clone(),
+            );
+            match std::thread::Builder::new()
+                .name(format!("dancegen-worker-{i}"))
+                .spawn(move || work(&j, &generator, &stop, &models))
+            {
+                Ok(t) => workers.threads.push(t),
+                Err(e) => {
+                    workers.stop(&jobs);
+                    return Err(format!("starting worker thread {i}: {e}"));
+                }
+            }
+        }
+        Ok(workers)
     }
 
     /// Stops taking jobs; a running job is cancelled and goes back to the queue on the next

@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use crate::common::{TestServer, demo_song, npy_f32, shared, start};
+use crate::common::{TestServer, demo_song, shared, start};
+use dancegen_io::npy::{NpyArray, parse_npy};
 use dancegen_server::Limits;
 use serde_json::Value;
 
@@ -97,10 +98,15 @@ fn view(s: &TestServer, id: &str, name: &str) -> Value {
     report
 }
 
+fn npy(bytes: &[u8]) -> NpyArray {
+    parse_npy(bytes).unwrap_or_else(|e| panic!("the job's .npy: {e}"))
+}
+
 /// Largest distance between the scene's joints of one dancer at `t` and frame `t·30` of a
 /// `(T, 24, 3)` `.npy`.
-fn max_error(scene: &Value, npy: &(Vec<usize>, Vec<f32>), t: u32) -> f32 {
-    let (shape, data) = npy;
+fn max_error(scene: &Value, npy: &NpyArray, t: u32) -> f32 {
+    assert_eq!(npy.dtype, "<f4", "the job's .npy is float32");
+    let (shape, data) = (&npy.shape, &npy.data);
     assert_eq!(&shape[1..], &[24, 3], "npy shape {shape:?}");
     let frame = (t * FPS) as usize;
     assert!(
@@ -114,7 +120,7 @@ fn max_error(scene: &Value, npy: &(Vec<usize>, Vec<f32>), t: u32) -> f32 {
     for (j, p) in joints.iter().enumerate() {
         for k in 0..3 {
             let x = p[k].as_f64().unwrap() as f32;
-            worst = worst.max((x - data[(frame * 24 + j) * 3 + k]).abs());
+            worst = worst.max((x - data[(frame * 24 + j) * 3 + k] as f32).abs());
         }
     }
     worst
@@ -171,9 +177,9 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
-            expected.push(npy_f32(&s.download(files["leader_npy"].as_str().unwrap())));
+            expected.push(npy(&s.download(files["leader_npy"].as_str().unwrap())));
         }
-        expected.push(npy_f32(&s.download(files["npy"].as_str().unwrap())));
+        expected.push(npy(&s.download(files["npy"].as_str().unwrap())));
         for t in SEEK_TIMES {
             let dancers = report["joints"][t.to_string()][0].as_array().unwrap();
             assert_eq!(
