@@ -126,9 +126,12 @@ async fn submit(
             ),
         ));
     }
-    check_queue(&s)?;
     let form = form.map_err(|e| ApiError::new(e.status(), e.body_text()))?;
     let up = upload::read(form, limit, s.limits.max_variations).await?;
+    // After the body is read, so the client (a browser still sending the song) gets the 429
+    // rather than a connection closed under it; before the song is decoded, so a full queue
+    // costs no decoding. Checked again when the job is added.
+    check_queue(&s)?;
     if up.song.bytes.len() > limit {
         return Err(ApiError::new(
             StatusCode::PAYLOAD_TOO_LARGE,
