@@ -37,6 +37,10 @@ pub enum Command {
     /// Generate a solo dance for a song (Lodge++), or with --leader the partner of a given
     /// leader (ReactDance); the installed default models (see `dancegen models`).
     Generate(GenerateArgs),
+    /// Generate many songs from a manifest (one JSON object per line: id, song, outputs and
+    /// any `generate` option by name): one model load, resumable (songs with a done.json are
+    /// skipped), shardable (--shard I/N) across processes and machines.
+    Batch(BatchArgs),
     /// List the models found and where they were looked for, or install models.
     Models(ModelsArgs),
     /// Assemble a Lodge++ model directory from its three training runs.
@@ -198,6 +202,29 @@ pub struct GenerateArgs {
     /// or ReactDance; the playback speed stays within ±15 %.
     #[arg(long)]
     pub no_beat_align: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct BatchArgs {
+    /// The manifest: one JSON object per line, e.g. {"id": "song-1", "song": "songs/a.mp3",
+    /// "system": "solo", "seed": 7, "outputs": ["dance.glb", "dance.npy"], "genre": "salsa"}.
+    /// Keys are `generate`'s options (snake_case or kebab-case; true for a switch); the seed
+    /// defaults to a hash of the id; relative paths are taken from the manifest's folder (or
+    /// the current one).
+    pub manifest: PathBuf,
+    /// Output folder: DIR/<id>/<output>, DIR/<id>/done.json once a song is complete, and one
+    /// line per song in DIR/results.jsonl ({"id", "line", "error", "skipped", "seconds"}).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Take only the lines whose 0-based index mod N is I (e.g. a Kubernetes Indexed Job's
+    /// $JOB_COMPLETION_INDEX/N or a Slurm array's $SLURM_ARRAY_TASK_ID/N).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::batch::Shard>,
+    /// Songs generated at once in this process (each already uses every core; more helps
+    /// only to overlap song decoding and file writing).
+    #[arg(long, default_value_t = 1, value_name = "K",
+        value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub jobs: u16,
 }
 
 #[derive(Args, Debug)]

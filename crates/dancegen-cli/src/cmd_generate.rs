@@ -47,8 +47,8 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// The library request the flags describe.
-fn request(args: &GenerateArgs) -> Result<Request> {
+/// The library request the flags describe (also each line of `dancegen batch`).
+pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
     let system = match (args.system.as_deref(), &args.leader) {
         (None, None) => "solo",
         (None, Some(_)) => "duet",

@@ -1,5 +1,6 @@
 //! `dancegen`: music to 3D dance, from the command line.
 
+mod batch;
 mod cli;
 mod cmd_beats;
 mod cmd_bundle;
@@ -35,6 +36,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Train(args) => cmd_train::run(args, cli.quiet),
         cli::Command::Dataset(cmd) => cmd_dataset::run(cmd, cli.quiet),
         cli::Command::Generate(args) => cmd_generate::run(args, cli.quiet),
+        cli::Command::Batch(args) => batch::run(args, cli.quiet),
         cli::Command::Bundle(args) => cmd_bundle::run(args, cli.quiet),
         cli::Command::Models(args) => cmd_models::run(args, cli.quiet),
         cli::Command::Serve(args) => cmd_serve::run(args, cli.quiet),

@@ -1,0 +1,286 @@
+//! `dancegen batch MANIFEST.jsonl --out DIR [--shard I/N] [--jobs K]`: many songs, one model
+//! load, resumable, shardable across processes and machines.
+//!
+//! - Shard `I/N` takes the manifest lines whose 0-based index (blank lines counted) mod `N`
+//!   is `I`; shards may share `DIR` (on one machine or a shared file system with working
+//!   `flock`).
+//! - A song is skipped when `DIR/<id>/done.json` exists, so a killed or failed run is simply
+//!   run again and every song is generated once.
+//! - Every song gets one line in `DIR/results.jsonl` per run, generated, skipped or failed;
+//!   one failed song does not stop the others, and the exit status is non-zero at the end.
+
+mod manifest;
+mod record;
+
+use std::path::Path;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use dancegen_generate::{CancelToken, Generator, ModelLocator};
+
+use crate::cli::BatchArgs;
+use manifest::{BadLine, Entry};
+use record::{Done, Outcome};
+
+/// `I/N`: this process's share of the manifest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (i, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("'{s}' is not I/N (e.g. 0/4)"))?;
+        let index: usize = i
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{i}' is not a shard index"))?;
+        let count: usize = n
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{n}' is not a shard count"))?;
+        if count == 0 || index >= count {
+            return Err(format!("shard {index}/{count}: need 0 ≤ I < N"));
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// Tallies for the closing summary.
+#[derive(Default)]
+struct Tally {
+    generated: AtomicUsize,
+    skipped: AtomicUsize,
+    failed: AtomicUsize,
+}
+
+pub fn run(args: &BatchArgs, quiet: bool) -> Result<()> {
+    let text = std::fs::read_to_string(&args.manifest)
+        .with_context(|| format!("{}: cannot read the manifest", args.manifest.display()))?;
+    let shard = args.shard.unwrap_or(Shard { index: 0, count: 1 });
+    let mine: Vec<Result<Entry, BadLine>> = manifest::parse(&text, &args.manifest)
+        .into_iter()
+        .filter(|(index, _)| index % shard.count == shard.index)
+        .map(|(_, line)| line)
+        .collect();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the output folder", args.out.display()))?;
+
+    let total = mine.len();
+    let generator = Generator::new(ModelLocator::from_environment());
+    let tally = Tally::default();
+    let queue = Mutex::new(mine.into_iter().enumerate());
+    let worker = || -> Result<()> {
+        loop {
+            let Some((n, line)) = queue.lock().unwrap_or_else(|e| e.into_inner()).next() else {
+                return Ok(());
+            };
+            let (id, line_no, result) = match &line {
+                Ok(entry) => (
+                    Some(entry.id.as_str()),
+                    entry.line,
+                    run_entry(&generator, entry, &args.out),
+                ),
+                Err(bad) => (
+                    bad.id.as_deref(),
+                    bad.line,
+                    SongResult::Failed(format!("manifest line {}: {}", bad.line, bad.error)),
+                ),
+            };
+            tally.count(&result);
+            if !quiet {
+                eprintln!("[{}/{total}] {}", n + 1, result.describe(id, line_no));
+            }
+            record::append_outcome(&args.out, &result.outcome(id, line_no))?;
+        }
+    };
+    let jobs = usize::from(args.jobs).min(total.max(1));
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..jobs).map(|_| scope.spawn(&worker)).collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| bail!("a batch worker panicked"))
+            })
+            .collect::<Result<Vec<()>>>()
+    })?;
+
+    let (generated, skipped, failed) = (
+        tally.generated.into_inner(),
+        tally.skipped.into_inner(),
+        tally.failed.into_inner(),
+    );
+    if !quiet {
+        eprintln!(
+            "batch: {generated} generated, {skipped} skipped, {failed} failed of {total} \
+             (shard {}/{}); results in {}",
+            shard.index,
+            shard.count,
+            args.out.join(record::RESULTS_FILE).display()
+        );
+    }
+    if failed > 0 {
+        bail!(
+            "{failed} of {total} songs failed (their errors are in {})",
+            args.out.join(record::RESULTS_FILE).display()
+        );
+    }
+    Ok(())
+}
+
+/// How one song went.
+enum SongResult {
+    Generated {
+        seconds: f64,
+        outputs: Vec<String>,
+    },
+    /// Already done (`done.json`), or being generated by another process right now.
+    Skipped {
+        busy: bool,
+    },
+    Failed(String),
+}
+
+impl SongResult {
+    fn outcome<'a>(&self, id: Option<&'a str>, line: usize) -> Outcome<'a> {
+        let (error, skipped, seconds) = match self {
+            SongResult::Generated { seconds, .. } => (None, false, *seconds),
+            SongResult::Skipped { .. } => (None, true, 0.0),
+            SongResult::Failed(e) => (Some(e.clone()), false, 0.0),
+        };
+        Outcome {
+            id,
+            line,
+            error,
+            skipped,
+            seconds,
+        }
+    }
+
+    fn describe(&self, id: Option<&str>, line: usize) -> String {
+        let who = match id {
+            Some(id) => id.to_string(),
+            None => format!("line {line}"),
+        };
+        match self {
+            SongResult::Generated { seconds, outputs } => {
+                format!("{who}: {} in {seconds:.1} s", outputs.join(", "))
+            }
+            SongResult::Skipped { busy: false } => format!("{who}: already done, skipped"),
+            SongResult::Skipped { busy: true } => {
+                format!("{who}: another process is generating it, skipped")
+            }
+            SongResult::Failed(e) => format!("{who}: failed: {e}"),
+        }
+    }
+}
+
+impl Tally {
+    fn count(&self, r: &SongResult) {
+        let n = match r {
+            SongResult::Generated { .. } => &self.generated,
+            SongResult::Skipped { .. } => &self.skipped,
+            SongResult::Failed(_) => &self.failed,
+        };
+        n.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Generates one song into `out/<id>/`, unless it is done or locked by another process.
+fn run_entry(generator: &Generator, entry: &Entry, out: &Path) -> SongResult {
+    match try_entry(generator, entry, out) {
+        Ok(r) => r,
+        Err(e) => SongResult::Failed(format!("{e:#}")),
+    }
+}
+
+fn try_entry(generator: &Generator, entry: &Entry, out: &Path) -> Result<SongResult> {
+    let dir = out.join(&entry.id);
+    if record::done_path(&dir).exists() {
+        return Ok(SongResult::Skipped { busy: false });
+    }
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("{}: cannot create the song's folder", dir.display()))?;
+    let Some(_lock) = record::try_lock_song(&dir)? else {
+        return Ok(SongResult::Skipped { busy: true });
+    };
+    // Done while we waited for the lock's holder to finish.
+    if record::done_path(&dir).exists() {
+        return Ok(SongResult::Skipped { busy: false });
+    }
+    remove_leftovers(&dir);
+    let started = Instant::now();
+    let command = generate_command(entry, &dir)?;
+    let args = manifest::parse_generate_args(&command[2..]).map_err(anyhow::Error::msg)?;
+    let request = crate::cmd_generate::request(&args)?;
+    let done = generator.run(&request, &|_| {}, &CancelToken::new())?;
+    let outputs: Vec<String> = done
+        .written
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let seconds = started.elapsed().as_secs_f64();
+    record::write_done(
+        &dir,
+        &Done {
+            id: &entry.id,
+            line: entry.line,
+            seed: entry.seed,
+            outputs: outputs.clone(),
+            command,
+            seconds,
+        },
+    )?;
+    Ok(SongResult::Generated { seconds, outputs })
+}
+
+/// Staging files of an earlier run killed while writing (`.dancegen-*`, the generation
+/// library's and `dancegen_io`'s temporary names). Only the holder of the song's lock calls
+/// this, so nothing else is writing there.
+fn remove_leftovers(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        if e.file_name().to_string_lossy().starts_with(".dancegen-") {
+            let p = e.path();
+            let removed = if p.is_dir() {
+                std::fs::remove_dir_all(&p)
+            } else {
+                std::fs::remove_file(&p)
+            };
+            if let Err(err) = removed {
+                tracing::warn!("{}: cannot remove a leftover: {err}", p.display());
+            }
+        }
+    }
+}
+
+/// `dancegen generate …` for the entry with its outputs in `dir` (`generate`'s default file
+/// name when the line lists none).
+fn generate_command(entry: &Entry, dir: &Path) -> Result<Vec<String>> {
+    let names: Vec<String> = if entry.outputs.is_empty() {
+        let args = manifest::parse_generate_args(&entry.args).map_err(anyhow::Error::msg)?;
+        crate::cmd_generate::request(&args)?
+            .outputs
+            .iter()
+            .filter_map(|o| o.path.file_name())
+            .map(|n| n.to_string_lossy().into_owned())
+            .collect()
+    } else {
+        entry.outputs.clone()
+    };
+    let mut command = vec!["dancegen".to_string(), "generate".to_string()];
+    for name in names {
+        command.push(format!("--output={}", dir.join(name).display()));
+    }
+    command.extend(entry.args.iter().cloned());
+    Ok(command)
+}
