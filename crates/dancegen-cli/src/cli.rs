@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use dancegen_motion::rig::Rig;
 
 #[derive(Parser, Debug)]
 #[command(name = "dancegen", version, about = "Turn music into 3D dance", long_about = None)]
@@ -120,10 +121,15 @@ pub struct GenerateArgs {
     /// Progress on stderr.
     #[arg(long, value_enum, default_value_t = ProgressArg::Bar)]
     pub progress: ProgressArg,
-    /// Output file, by extension: .glb .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres, Y-up,
-    /// 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
+    /// Output file, by extension: .glb .fbx .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres,
+    /// Y-up, 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
     #[arg(short, long, value_name = "FILE")]
     pub output: Vec<PathBuf>,
+    /// Bone names of .bvh, .fbx and .glb: smpl, mixamo (mixamorig:Hips, ...), ue5 (pelvis,
+    /// thigh_l, ...) or vrm (hips, leftUpperLeg, ...). The joints stand in the same places in
+    /// every rig; .npy, .npz and .json keep SMPL's names and order.
+    #[arg(long, default_value = "smpl", value_parser = parse_rig)]
+    pub rig: Rig,
     /// Model directory (default: lodgepp-small, or reactdance-small with --leader, found on
     /// the model search path: `dancegen models` shows it).
     #[arg(long, value_name = "DIR")]
@@ -399,7 +405,7 @@ pub struct ConvertArgs {
     /// or joints .npy (T, J, 3).
     pub input: PathBuf,
     /// Output; the format follows the extension: .npy (world joints (T, J, 3), float32, Y-up),
-    /// .bvh, .glb, .npz, .json.
+    /// .bvh, .glb, .fbx, .npz, .json.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output frame rate (default: the input's).
@@ -414,6 +420,16 @@ pub struct ConvertArgs {
     /// Keys of an .npz output.
     #[arg(long, value_enum, default_value_t = NpzStyleArg::Amass)]
     pub npz_style: NpzStyleArg,
+    /// Bone names of .bvh, .fbx and .glb output: smpl, mixamo (mixamorig:Hips, ...), ue5
+    /// (pelvis, thigh_l, ...) or vrm (hips, leftUpperLeg, ...); joint positions are the same
+    /// in every rig. Needs SMPL 24 motion (add --to smpl24 for a BVH).
+    #[arg(long, default_value = "smpl", value_parser = parse_rig)]
+    pub rig: Rig,
+}
+
+/// `--rig NAME`, with the presets listed when the name is unknown.
+fn parse_rig(s: &str) -> Result<Rig, String> {
+    Rig::from_name(s).map_err(|e| e.to_string())
 }
 
 #[derive(Args, Debug)]

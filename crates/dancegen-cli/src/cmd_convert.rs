@@ -19,6 +19,7 @@ pub fn run(args: &ConvertArgs, quiet: bool) -> Result<()> {
             NpzStyleArg::Amass => NpzStyle::Amass,
             NpzStyleArg::Edge => NpzStyle::Edge,
         },
+        rig: args.rig,
     };
     let pb = spinner(&format!("converting {}", args.input.display()), quiet);
     let loaded = load_motion_file(&args.input)?;

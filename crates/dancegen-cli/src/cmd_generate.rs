@@ -99,7 +99,11 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         model: args.model.clone(),
         outputs: outputs
             .into_iter()
-            .map(|path| OutputRequest { path, dancers })
+            .map(|path| OutputRequest {
+                path,
+                dancers,
+                rig: args.rig,
+            })
             .collect(),
     })
 }

@@ -168,7 +168,7 @@ fn bad_motion_inputs_fail_cleanly() {
         "convert",
         shared().join(AIST).to_str().unwrap(),
         "-o",
-        dir.path().join("x.fbx").to_str().unwrap(),
+        dir.path().join("x.fbz").to_str().unwrap(),
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown output format"));
 }

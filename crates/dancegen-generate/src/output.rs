@@ -30,6 +30,8 @@ pub const GIF_FPS: f32 = 15.0;
 pub enum OutputFormat {
     /// glTF binary: skinned skeletons with the animation (Blender, Unity, Unreal, three.js).
     Glb,
+    /// FBX 7.4 binary: the same scene as `.glb` (Maya, MotionBuilder, Unity, Unreal, Blender).
+    Fbx,
     Bvh,
     /// SMPL parameters (AMASS-style npz).
     Npz,
@@ -43,8 +45,9 @@ pub enum OutputFormat {
 }
 
 impl OutputFormat {
-    pub const ALL: [OutputFormat; 7] = [
+    pub const ALL: [OutputFormat; 8] = [
         OutputFormat::Glb,
+        OutputFormat::Fbx,
         OutputFormat::Bvh,
         OutputFormat::Npz,
         OutputFormat::Npy,
@@ -56,6 +59,7 @@ impl OutputFormat {
     pub fn extension(self) -> &'static str {
         match self {
             OutputFormat::Glb => "glb",
+            OutputFormat::Fbx => "fbx",
             OutputFormat::Bvh => "bvh",
             OutputFormat::Npz => "npz",
             OutputFormat::Npy => "npy",
@@ -78,8 +82,8 @@ impl OutputFormat {
             .ok_or_else(|| GenerateError::Output {
                 path: path.to_path_buf(),
                 reason: format!(
-                    "unknown output format '.{ext}' (use .glb, .bvh, .npz, .npy, .json, .gif or \
-                     .mp4)"
+                    "unknown output format '.{ext}' (use .glb, .fbx, .bvh, .npz, .npy, .json, \
+                     .gif or .mp4)"
                 ),
             })
     }
@@ -88,7 +92,11 @@ impl OutputFormat {
     pub fn holds_many_dancers(self) -> bool {
         matches!(
             self,
-            OutputFormat::Glb | OutputFormat::Json | OutputFormat::Gif | OutputFormat::Mp4
+            OutputFormat::Glb
+                | OutputFormat::Fbx
+                | OutputFormat::Json
+                | OutputFormat::Gif
+                | OutputFormat::Mp4
         )
     }
 
@@ -287,7 +295,7 @@ pub(crate) fn write_all(
                 save_motion_file(
                     &tmp,
                     &LoadedMotion::Smpl(d.motion.clone()),
-                    &ConvertOptions::default(),
+                    &convert_options(&p.request),
                 )
                 .map_err(|e| about_dest(e, &tmp, &one))?;
             }
@@ -332,7 +340,7 @@ pub(crate) fn write_all(
             };
             written.map_err(|e| about_dest(e, &tmp, dest))?;
         } else {
-            save_motion_file(&tmp, &motion, &ConvertOptions::default())
+            save_motion_file(&tmp, &motion, &convert_options(&p.request))
                 .map_err(|e| about_dest(e, &tmp, dest))?;
         }
         done += n;
@@ -340,6 +348,14 @@ pub(crate) fn write_all(
     }
     tracker.check()?;
     staging.commit()
+}
+
+/// How a motion file is written for `request`.
+fn convert_options(request: &OutputRequest) -> ConvertOptions {
+    ConvertOptions {
+        rig: request.rig,
+        ..ConvertOptions::default()
+    }
 }
 
 /// `dir/stem_k.ext` for `dir/stem.ext`.

@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+pub use dancegen_motion::rig::Rig;
+
 use crate::systems::duet::DuetOptions;
 use crate::systems::group::GroupOptions;
 use crate::systems::solo::SoloOptions;
@@ -79,6 +81,8 @@ pub enum DancerSelection {
 pub struct OutputRequest {
     pub path: PathBuf,
     pub dancers: DancerSelection,
+    /// Bone names of `.bvh`, `.fbx` and `.glb` (other formats keep SMPL's).
+    pub rig: Rig,
 }
 
 impl OutputRequest {
@@ -86,6 +90,7 @@ impl OutputRequest {
         OutputRequest {
             path: path.into(),
             dancers: DancerSelection::Auto,
+            rig: Rig::Smpl,
         }
     }
 }

@@ -227,6 +227,7 @@ fn follower_only_and_many_dancer_rules() {
         outputs: vec![OutputRequest {
             path: dir.path().join("only.json"),
             dancers: DancerSelection::Generated,
+            rig: Default::default(),
         }],
     };
     let done = g.run(&req, &|_| {}, &CancelToken::new()).unwrap();
@@ -273,7 +274,7 @@ fn bad_outputs_fail_before_any_work() {
     let g = generator();
     let dir = tempfile::tempdir().unwrap();
     for (path, needle) in [
-        (dir.path().join("a.fbx"), "unknown output format"),
+        (dir.path().join("a.fbz"), "unknown output format"),
         (dir.path().join("no/such/dir/a.glb"), "does not exist"),
     ] {
         let e = g

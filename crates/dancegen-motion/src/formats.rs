@@ -9,6 +9,7 @@
 //! | `.npz` | AMASS-style SMPL (`poses`, `trans`, `mocap_framerate`), EDGE-style (`smpl_poses`, `smpl_trans`) | both |
 //! | `.npy` | FineDance `(T, 315)`, joints `(T, J, 3)` | world joints `(T, J, 3)` float32 |
 //! | `.glb` | – | animated skeleton + skinned capsule mesh; every dancer of a group |
+//! | `.fbx` | – | the same scene as `.glb`, FBX 7.4 binary (Y-up, metres); every dancer of a group |
 //! | `.json` | – | joints, skeleton and (for SMPL) poses |
 
 use std::path::{Path, PathBuf};
@@ -16,11 +17,13 @@ use std::path::{Path, PathBuf};
 use crate::aistpp;
 use crate::bvh::{self, Bvh, BvhReadOptions, BvhWriteOptions};
 use crate::bvh_motion::{self, bvh_world_positions};
+use crate::fbx::{self, FbxOptions};
 use crate::gltf::{self, DancerAnimation, GlbOptions};
 use crate::repr::finedance::FineDanceMotion;
 use crate::repr::group::GroupMotion;
 use crate::repr::motion::SmplMotion;
 use crate::retarget;
+use crate::rig::Rig;
 use crate::skeleton::Skeleton;
 use crate::smpl_npz::SmplNpzOptions;
 
@@ -156,11 +159,14 @@ pub struct ConvertOptions {
     pub fps: Option<f32>,
     /// Retarget a BVH to SMPL 24.
     pub to_smpl24: bool,
-    /// Which dancer of a group file to keep. Single-person formats need one; `.glb` keeps all
-    /// dancers unless this picks one.
+    /// Which dancer of a group file to keep. Single-person formats need one; `.glb` and `.fbx`
+    /// keep all dancers unless this picks one.
     pub dancer: Option<usize>,
     /// Style of `.npz` output.
     pub npz_style: NpzStyle,
+    /// Bone names of `.bvh`, `.glb` and `.fbx` output ([`Rig`]; joint positions do not change).
+    /// `.npy`, `.npz` and `.json` keep SMPL's order and names, which research tools expect.
+    pub rig: Rig,
 }
 
 /// `.npz` output flavour.
@@ -317,7 +323,7 @@ fn single<'a>(path: &Path, m: &'a LoadedMotion) -> Result<&'a SmplMotion, Format
             path,
             format!(
                 "the input has {} dancers; choose one with --dancer N (0-based), or write \
-                 .glb, .npy or .json, which hold them all",
+                 .glb, .fbx, .npy or .json, which hold them all",
                 g.len()
             ),
         )),
@@ -391,52 +397,31 @@ pub fn save_motion_file(
         }
         "bvh" => {
             let b = match m {
-                LoadedMotion::Bvh(b) => b.clone(),
+                LoadedMotion::Bvh(b) => {
+                    no_rig_for_raw_bvh(out, opts)?;
+                    b.clone()
+                }
                 other => {
                     let s = single(out, other)?;
-                    bvh_motion::smpl_to_bvh(&s.poses, &s.trans, s.fps as f64)
-                        .map_err(|e| err(out, e))?
+                    let mut b = bvh_motion::smpl_to_bvh(&s.poses, &s.trans, s.fps as f64)
+                        .map_err(|e| err(out, e))?;
+                    rename_smpl_joints(&mut b, opts.rig);
+                    b
                 }
             };
             bvh::write_bvh_file(out, &b, &BvhWriteOptions::default()).map_err(|e| err(out, e))
         }
         "glb" => {
             let glb = GlbOptions::default();
-            match m {
-                LoadedMotion::Bvh(b) => {
-                    let (skel, poses, trans) =
-                        bvh_motion::bvh_skeleton_motion(b, 1.0).map_err(|e| err(out, e))?;
-                    let fps = b.nominal_fps() as f32;
-                    gltf::write_glb(out, &skel, &poses, &trans, fps, &glb)
-                }
-                LoadedMotion::Group(g) => {
-                    let chosen = group_members(out, g, opts.dancer)?;
-                    let dancers: Vec<DancerAnimation<'_>> = chosen
-                        .iter()
-                        .map(|s| DancerAnimation {
-                            local_rotations_axis_angle: &s.poses,
-                            root_translation: &s.trans,
-                        })
-                        .collect();
-                    let fps = chosen[0].fps;
-                    if let Some((d, s)) = chosen.iter().enumerate().find(|(_, s)| s.fps != fps) {
-                        return Err(err(
-                            out,
-                            format!(
-                                "dancer {d} is at {} fps but dancer 0 at {fps}; one .glb \
-                                 animation needs one frame rate",
-                                s.fps
-                            ),
-                        ));
-                    }
-                    gltf::write_glb_multi(out, &Skeleton::smpl24(), &dancers, fps, &glb)
-                }
-                other => {
-                    let s = single(out, other)?;
-                    gltf::write_glb(out, &Skeleton::smpl24(), &s.poses, &s.trans, s.fps, &glb)
-                }
-            }
-            .map_err(|e| err(out, e))
+            with_dancers(out, m, opts, ".glb", |skel, dancers, fps| {
+                gltf::write_glb_multi(out, skel, dancers, fps, &glb).map_err(|e| err(out, e))
+            })
+        }
+        "fbx" => {
+            let fbx = FbxOptions::default();
+            with_dancers(out, m, opts, ".fbx", |skel, dancers, fps| {
+                fbx::write_fbx(out, skel, dancers, fps, &fbx).map_err(|e| err(out, e))
+            })
         }
         "npz" => {
             let s = single(out, m)?;
@@ -453,8 +438,92 @@ pub fn save_motion_file(
         "json" => write_json(out, m),
         other => Err(err(
             out,
-            format!("unknown output format '.{other}' (use .npy, .bvh, .glb, .npz or .json)"),
+            format!("unknown output format '.{other}' (use .npy, .bvh, .glb, .fbx, .npz or .json)"),
         )),
+    }
+}
+
+/// Hands a motion to a scene exporter (`.glb`, `.fbx`) as a skeleton plus dancers sharing one
+/// timeline: a raw BVH with its own skeleton, every dancer of a group (or the one `--dancer`
+/// picks), or a single SMPL 24 motion. `format` names the extension in messages.
+fn with_dancers(
+    out: &Path,
+    m: &LoadedMotion,
+    opts: &ConvertOptions,
+    format: &str,
+    write: impl FnOnce(&Skeleton, &[DancerAnimation<'_>], f32) -> Result<(), FormatError>,
+) -> Result<(), FormatError> {
+    match m {
+        LoadedMotion::Bvh(b) => {
+            no_rig_for_raw_bvh(out, opts)?;
+            let (skel, poses, trans) =
+                bvh_motion::bvh_skeleton_motion(b, 1.0).map_err(|e| err(out, e))?;
+            let dancer = DancerAnimation {
+                local_rotations_axis_angle: &poses,
+                root_translation: &trans,
+            };
+            write(&skel, &[dancer], b.nominal_fps() as f32)
+        }
+        LoadedMotion::Group(g) => {
+            let chosen = group_members(out, g, opts.dancer)?;
+            let dancers: Vec<DancerAnimation<'_>> = chosen
+                .iter()
+                .map(|s| DancerAnimation {
+                    local_rotations_axis_angle: &s.poses,
+                    root_translation: &s.trans,
+                })
+                .collect();
+            let fps = chosen[0].fps;
+            if let Some((d, s)) = chosen.iter().enumerate().find(|(_, s)| s.fps != fps) {
+                return Err(err(
+                    out,
+                    format!(
+                        "dancer {d} is at {} fps but dancer 0 at {fps}; one {format} \
+                         animation needs one frame rate",
+                        s.fps
+                    ),
+                ));
+            }
+            write(&opts.rig.skeleton(), &dancers, fps)
+        }
+        other => {
+            let s = single(out, other)?;
+            let dancer = DancerAnimation {
+                local_rotations_axis_angle: &s.poses,
+                root_translation: &s.trans,
+            };
+            write(&opts.rig.skeleton(), &[dancer], s.fps)
+        }
+    }
+}
+
+/// A rig preset names SMPL 24 joints; a BVH kept on its own skeleton has other joints.
+fn no_rig_for_raw_bvh(out: &Path, opts: &ConvertOptions) -> Result<(), FormatError> {
+    if opts.rig == Rig::Smpl {
+        return Ok(());
+    }
+    Err(err(
+        out,
+        format!(
+            "--rig {} renames SMPL 24 joints, and this BVH keeps its own skeleton: add --to \
+             smpl24",
+            opts.rig
+        ),
+    ))
+}
+
+/// Gives an SMPL 24 BVH (written by [`bvh_motion::smpl_to_bvh`], joints in depth-first
+/// order) the bone names of `rig`.
+fn rename_smpl_joints(b: &mut Bvh, rig: Rig) {
+    if rig == Rig::Smpl {
+        return;
+    }
+    let smpl = Skeleton::smpl24();
+    let names = rig.joint_names();
+    for joint in &mut b.joints {
+        if let Some(j) = smpl.index_of(&joint.name) {
+            joint.name = names[j].clone();
+        }
     }
 }
 

@@ -166,6 +166,7 @@ fn generate(
             outputs.push(OutputRequest {
                 path: dir.join(LEADER_NPY),
                 dancers: DancerSelection::Given,
+                rig: Default::default(),
             });
         }
         let request = Request {

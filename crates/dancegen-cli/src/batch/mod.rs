@@ -102,7 +102,7 @@ pub fn run(args: &BatchArgs, quiet: bool) -> Result<()> {
     };
     let jobs = usize::from(args.jobs).min(total.max(1));
     std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..jobs).map(|_| scope.spawn(&worker)).collect();
+        let handles: Vec<_> = (0..jobs).map(|_| scope.spawn(worker)).collect();
         handles
             .into_iter()
             .map(|h| {
