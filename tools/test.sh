@@ -10,6 +10,9 @@
 #   - node + npm: the Khronos glTF validator and three.js, installed from the npm registry by
 #     the tests themselves into cargo's target directory (pinned versions), and puppeteer-core
 #     (drives Chromium; never downloads a browser), installed below from its lock file;
+#   - blender + python3-numpy: the real-client test imports the .bvh, .glb and .fbx that
+#     `generate` writes into Blender headless (Debian's Blender 3.4; it is GPL and only ever
+#     run as a separate program, never linked or vendored);
 #   - ../shared next to the checkout: golden fixtures and real songs and motion.
 # Missing Debian packages are installed with apt-get (as root, or through sudo); without
 # either the script names them and stops.
@@ -21,6 +24,9 @@ pkg-config --exists soxr 2>/dev/null || need+=(libsoxr-dev pkg-config)
 command -v ffmpeg >/dev/null || need+=(ffmpeg)
 [ -x /usr/bin/chromium ] || need+=(chromium)
 { command -v node >/dev/null && command -v npm >/dev/null; } || need+=(nodejs npm)
+command -v blender >/dev/null || need+=(blender)
+# Blender's glTF importer needs numpy in the Python Blender runs (Debian's python3).
+/usr/bin/python3 -c 'import numpy' 2>/dev/null || need+=(python3-numpy)
 if [ ${#need[@]} -gt 0 ]; then
   if ! command -v apt-get >/dev/null; then
     echo "tools/test.sh: install these first (Debian names): ${need[*]}" >&2
@@ -52,4 +58,6 @@ if [ ! -d "$browser/node_modules/puppeteer-core" ] ||
   echo "tools/test.sh: installing the browser test's npm packages ($browser)" >&2
   npm ci --prefix "$browser" --no-audit --no-fund --silent
 fi
+# Installed above, so the Blender test must run (without this it skips where Blender is absent).
+export DANCEGEN_REQUIRE_BLENDER=1
 exec cargo test --workspace --locked "$@"
