@@ -90,7 +90,7 @@ fn a_job_killed_mid_generation_finishes_after_a_restart_with_the_clis_bytes() {
             .unwrap(),
     );
     let cli = tempfile::tempdir().unwrap();
-    let outputs: Vec<String> = ["glb", "npy", "bvh", "npz"]
+    let outputs: Vec<String> = ["glb", "fbx", "npy", "bvh", "npz"]
         .iter()
         .map(|ext| {
             cli.path()
@@ -114,7 +114,7 @@ fn a_job_killed_mid_generation_finishes_after_a_restart_with_the_clis_bytes() {
         args.extend(["-o", o.as_str()]);
     }
     ok(&dancegen(&args));
-    for ext in ["glb", "npy", "bvh", "npz"] {
+    for ext in ["glb", "fbx", "npy", "bvh", "npz"] {
         let served = server
             .client
             .download(job["variations"][0]["files"][ext].as_str().unwrap())

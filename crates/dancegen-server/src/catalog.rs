@@ -142,7 +142,7 @@ impl Catalog {
             .collect();
         json!({
             "systems": systems,
-            "formats": ["glb", "bvh", "npz", "npy", "json", "mp4"],
+            "formats": ["glb", "fbx", "bvh", "npz", "npy", "json", "mp4"],
             "limits": {
                 "upload_bytes": limits.upload_bytes,
                 "song_seconds": limits.song_seconds,

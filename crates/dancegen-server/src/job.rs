@@ -295,7 +295,7 @@ fn opt_seconds(obj: &Map<String, Value>, key: &str) -> Result<Option<f64>, ApiEr
     Ok(Some(x))
 }
 
-/// One variation's files by kind (`glb`, `bvh`, `npz`, `npy`, `json`, `mp4`, and a duet's
+/// One variation's files by kind (`glb`, `fbx`, `bvh`, `npz`, `npy`, `json`, `mp4`, and a duet's
 /// `leader_npy`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct VariationView {
@@ -347,7 +347,7 @@ pub fn variation_stem(k: usize) -> String {
 pub const LEADER_NPY: &str = "leader.npy";
 
 /// Formats every job writes (`mp4` only when asked), as the contract lists them.
-pub const MOTION_FORMATS: [&str; 5] = ["glb", "bvh", "npz", "npy", "json"];
+pub const MOTION_FORMATS: [&str; 6] = ["glb", "fbx", "bvh", "npz", "npy", "json"];
 
 #[cfg(test)]
 mod tests {

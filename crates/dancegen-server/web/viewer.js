@@ -20,6 +20,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 /** Download-button labels by file kind; unknown kinds show their own name. */
 const FILE_LABELS = {
   glb: '3D scene (.glb)',
+  fbx: 'FBX',
   bvh: 'BVH',
   npz: 'SMPL (.npz)',
   npy: 'Joints (.npy)',
