@@ -172,3 +172,77 @@ fn bad_motion_inputs_fail_cleanly() {
     ]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown output format"));
 }
+
+#[test]
+fn rig_presets_rename_bones_and_unknown_rigs_are_listed() {
+    let dir = tempfile::tempdir().unwrap();
+    let aist = shared().join(AIST);
+    let (bvh, glb, fbx, npy, npy_mixamo) = (
+        dir.path().join("m.bvh"),
+        dir.path().join("m.glb"),
+        dir.path().join("m.fbx"),
+        dir.path().join("smpl.npy"),
+        dir.path().join("mixamo.npy"),
+    );
+    for out in [&bvh, &glb, &fbx, &npy_mixamo] {
+        let o = dancegen(&[
+            "convert",
+            aist.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--rig",
+            "mixamo",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let o = dancegen(&[
+        "convert",
+        aist.to_str().unwrap(),
+        "-o",
+        npy.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    // Bone names change in the scene formats; joints (and the research formats) do not.
+    let text = std::fs::read_to_string(&bvh).unwrap();
+    assert!(text.contains("ROOT mixamorig:Hips") && text.contains("JOINT mixamorig:LeftForeArm"));
+    assert!(!text.contains("lelbow"));
+    for f in [&glb, &fbx] {
+        let bytes = std::fs::read(f).unwrap();
+        let has = |s: &str| bytes.windows(s.len()).any(|w| w == s.as_bytes());
+        assert!(
+            has("mixamorig:RightToeBase") && !has("rtoes"),
+            "{}",
+            f.display()
+        );
+    }
+    assert_eq!(
+        std::fs::read(&npy).unwrap(),
+        std::fs::read(&npy_mixamo).unwrap()
+    );
+
+    let o = dancegen(&[
+        "convert",
+        aist.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "--rig",
+        "maya",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("unknown rig 'maya' (use smpl, mixamo, ue5 or vrm)"),
+        "{e}"
+    );
+    // A BVH kept on its own skeleton has no SMPL joints to rename.
+    let salsa = shared().join("data/cmu-salsa/61_13_scaled.bvh");
+    let o = dancegen(&[
+        "convert",
+        salsa.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "--rig",
+        "ue5",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("add --to smpl24"), "{e}");
+}
