@@ -130,6 +130,12 @@ pub struct GenerateArgs {
     /// every rig; .npy, .npz and .json keep SMPL's names and order.
     #[arg(long, default_value = "smpl", value_parser = parse_rig)]
     pub rig: Rig,
+    /// Your own humanoid character (.glb, .vrm or .gltf with a skinned mesh): the .glb outputs
+    /// become it dancing, retargeted onto its bones (matched by name — Mixamo, UE, VRM, SMPL,
+    /// Blender-style — and hierarchy), its rest pose and its height. One dancer (with a leader,
+    /// add --follower-only).
+    #[arg(long, value_name = "CHARACTER.glb")]
+    pub character: Option<PathBuf>,
     /// Model directory (default: lodgepp-small, or reactdance-small with --leader, found on
     /// the model search path: `dancegen models` shows it).
     #[arg(long, value_name = "DIR")]

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest};
+use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader};
 use dancegen_generate::systems::group::{GroupOptions, LongSampler};
 
@@ -80,6 +80,18 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
     } else {
         args.output.clone()
     };
+    let character = match &args.character {
+        None => None,
+        Some(path) => {
+            if !outputs.iter().any(|o| has_extension(o, "glb")) {
+                bail!(
+                    "--character {}: the character dances in the .glb outputs; add -o NAME.glb",
+                    path.display()
+                );
+            }
+            Some(std::sync::Arc::new(Character::load(path)?))
+        }
+    };
     let dancers = if args.follower_only {
         DancerSelection::Generated
     } else {
@@ -103,9 +115,15 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                 path,
                 dancers,
                 rig: args.rig,
+                character: character.clone(),
             })
             .collect(),
     })
+}
+
+fn has_extension(path: &std::path::Path, ext: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
 }
 
 fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {

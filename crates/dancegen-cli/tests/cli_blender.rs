@@ -238,3 +238,56 @@ fn mixamo_rig_imports_with_mixamorig_names_where_the_smpl_rig_stands() {
         check(&r, &format!("mixamo .{ext}"), 24, "", &names, &mixamo, tol);
     }
 }
+
+#[test]
+fn blender_imports_a_character_dancing() {
+    let Some(blender) = blender() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let robot = shared().join("data/holistic/three-js-robot-expressive/RobotExpressive.glb");
+    let out = dir.path().join("robot.glb");
+    let npy = dir.path().join("robot.npy");
+    ok(&dancegen(&[
+        "generate",
+        &song(),
+        "-q",
+        "--end",
+        "6",
+        "--character",
+        robot.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-o",
+        npy.to_str().unwrap(),
+    ]));
+    let dance = joints(&npy);
+    let frames = frames_of(&dance);
+    let r = import(&blender, &out, &frames);
+    assert_eq!(r["fps"], 30.0);
+    assert!(
+        !r["meshes"].as_array().unwrap().is_empty(),
+        "the robot's meshes"
+    );
+    let arms = r["armatures"].as_array().unwrap();
+    assert!(!arms.is_empty());
+    for a in arms {
+        let span = a["action_last"].as_f64().unwrap() - a["action_first"].as_f64().unwrap();
+        assert_eq!(
+            span as usize + 1,
+            dance.0,
+            "{}: the dance's frames",
+            a["name"]
+        );
+        // The robot moves: its bones are elsewhere in the middle of the dance than at the start.
+        let at = |f: usize| a["frames"][f.to_string()].as_object().unwrap().clone();
+        let (first, middle) = (at(frames[0]), at(frames[1]));
+        let moved = first
+            .iter()
+            .filter(|(name, p)| middle[*name] != **p)
+            .count();
+        assert!(
+            moved > first.len() / 2,
+            "{moved} of {} bones moved",
+            first.len()
+        );
+    }
+}

@@ -10,7 +10,10 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
+use dancegen_motion::character::{self, Character};
 use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
+use dancegen_motion::gltf::DancerAnimation;
+use dancegen_motion::skeleton::Skeleton;
 use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
 
 use crate::error::GenerateError;
@@ -312,6 +315,12 @@ pub(crate) fn write_all(
             continue;
         }
         let motion = select(dance, p.request.dancers, p.format, dest)?;
+        if let (OutputFormat::Glb, Some(character)) = (p.format, &p.request.character) {
+            write_character(&tmp, dest, character, &motion)?;
+            done += n;
+            tracker.advance(stage::WRITE_OUTPUTS, done, total);
+            continue;
+        }
         if p.format.is_preview() {
             let tracks = tracks_from_motion(dest, &motion)?;
             let scene = Scene::new(&tracks, &RenderOptions::new(PREVIEW_WIDTH, PREVIEW_HEIGHT))?;
@@ -350,6 +359,35 @@ pub(crate) fn write_all(
     staging.commit()
 }
 
+/// The user's character dancing `motion` (one dancer), as a `.glb` at `tmp` (for `dest`).
+fn write_character(
+    tmp: &Path,
+    dest: &Path,
+    character: &Character,
+    motion: &LoadedMotion,
+) -> Result<(), GenerateError> {
+    let LoadedMotion::Smpl(s) = motion else {
+        let n = match motion {
+            LoadedMotion::Group(g) => g.len(),
+            _ => 0,
+        };
+        return Err(GenerateError::Output {
+            path: dest.to_path_buf(),
+            reason: format!(
+                "--character puts one dancer on the character and this .glb would hold {n}; \
+                 with a leader add --follower-only"
+            ),
+        });
+    };
+    let dancer = DancerAnimation {
+        local_rotations_axis_angle: &s.poses,
+        root_translation: &s.trans,
+    };
+    let animation = character::retarget(character, &Skeleton::smpl24(), &[dancer], s.fps)
+        .map_err(|e| about_dest(e, tmp, dest))?;
+    character::write_glb(tmp, character, &animation).map_err(|e| about_dest(e, tmp, dest))
+}
+
 /// How a motion file is written for `request`.
 fn convert_options(request: &OutputRequest) -> ConvertOptions {
     ConvertOptions {
@@ -380,7 +418,6 @@ fn write_group_json(
     motion: &LoadedMotion,
     g: &GroupReport,
 ) -> Result<(), dancegen_motion::formats::FormatError> {
-    use dancegen_motion::skeleton::Skeleton;
     let (shape, positions) = dancegen_motion::formats::joint_positions(out, motion)?;
     let s = Skeleton::smpl24();
     let v = serde_json::json!({

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+pub use dancegen_motion::character::Character;
 pub use dancegen_motion::rig::Rig;
 
 use crate::systems::duet::DuetOptions;
@@ -83,6 +84,9 @@ pub struct OutputRequest {
     pub dancers: DancerSelection,
     /// Bone names of `.bvh`, `.fbx` and `.glb` (other formats keep SMPL's).
     pub rig: Rig,
+    /// A `.glb` output becomes this character (the user's humanoid glTF/VRM) dancing the dance,
+    /// retargeted onto its skeleton; other formats ignore it.
+    pub character: Option<Arc<Character>>,
 }
 
 impl OutputRequest {
@@ -91,6 +95,7 @@ impl OutputRequest {
             path: path.into(),
             dancers: DancerSelection::Auto,
             rig: Rig::Smpl,
+            character: None,
         }
     }
 }

@@ -228,6 +228,7 @@ fn follower_only_and_many_dancer_rules() {
             path: dir.path().join("only.json"),
             dancers: DancerSelection::Generated,
             rig: Default::default(),
+            character: None,
         }],
     };
     let done = g.run(&req, &|_| {}, &CancelToken::new()).unwrap();

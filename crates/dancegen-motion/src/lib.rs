@@ -10,6 +10,7 @@ pub mod bvh;
 pub mod bvh_motion;
 pub mod capsule_body;
 pub(crate) mod capsule_mesh;
+pub mod character;
 pub mod conventions;
 pub mod couple_separation;
 pub mod fbx;

@@ -167,6 +167,7 @@ fn generate(
                 path: dir.join(LEADER_NPY),
                 dancers: DancerSelection::Given,
                 rig: Default::default(),
+                character: None,
             });
         }
         let request = Request {

@@ -15,7 +15,7 @@ use serde_json::{Map, Value};
 use crate::cli::GenerateArgs;
 
 /// Keys holding a path: resolved against the manifest's folder (see [`resolve`]).
-const PATH_KEYS: [&str; 4] = ["song", "leader", "formation", "model"];
+const PATH_KEYS: [&str; 5] = ["song", "leader", "formation", "model", "character"];
 /// `generate` options a batch decides itself.
 const RESERVED_KEYS: [&str; 3] = ["output", "o", "progress"];
 

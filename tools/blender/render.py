@@ -1,14 +1,22 @@
-"""Render one frame of a dancegen .fbx as Blender imports it, headless (Cycles on the CPU, no
-GPU or display needed). Used for the README's picture of the FBX in Blender:
+"""Render one frame of a dancegen .fbx or .glb as Blender imports it, headless (Cycles on the
+CPU, no GPU or display needed). Used for the README's pictures of our files in Blender:
 
     blender -b --factory-startup -noaudio --python-exit-code 1 \
-        --python tools/blender/render_fbx.py -- dance.fbx FRAME out.png
+        --python tools/blender/render.py -- dance.fbx FRAME out.png
 """
 
 import math
 import sys
+import warnings
 
 import bpy
+import numpy
+
+# Blender 3.4's glTF importer uses numpy.bool, removed in numpy 1.24.
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    if not hasattr(numpy, "bool"):
+        numpy.bool = bool
 from mathutils import Vector
 
 
@@ -18,7 +26,10 @@ def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps = 30
-    bpy.ops.import_scene.fbx(filepath=path)
+    if path.lower().endswith(".fbx"):
+        bpy.ops.import_scene.fbx(filepath=path)
+    else:
+        bpy.ops.import_scene.gltf(filepath=path)
     scene.frame_set(frame)
 
     # Frame the dancers: the bounding box of every mesh at this frame.
