@@ -36,6 +36,7 @@
 
 use crate::capsule_mesh::{CapsuleShape, build_capsule_mesh};
 use crate::rotation::Quat;
+use crate::scene_input::{SceneInputError, check_scene};
 use crate::skeleton::Skeleton;
 use crate::vec3::add;
 use serde_json::{Value, json};
@@ -68,50 +69,14 @@ impl Default for GlbOptions {
     }
 }
 
-/// Why the inputs cannot be exported.
+/// Why the inputs cannot be exported as glTF.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GlbInputError {
-    #[error("motion has no frames (a single-frame pose is fine, zero frames is not)")]
-    NoFrames,
-    #[error(
-        "rotations have {len} values, not a multiple of {joints} joints × 3 (axis-angle, T×J×3)"
-    )]
-    RotationShape { len: usize, joints: usize },
-    #[error("{frames} frames of rotations but {got} root translation values (expected {expected})")]
-    TranslationShape {
-        frames: usize,
-        got: usize,
-        expected: usize,
-    },
-    #[error("{what} value {index} is not finite ({value})")]
-    NonFinite {
-        what: &'static str,
-        index: usize,
-        value: f32,
-    },
-    #[error("fps must be finite and positive, got {0}")]
-    BadFps(f32),
+    /// What every scene format checks ([`crate::scene_input`]).
+    #[error(transparent)]
+    Scene(#[from] SceneInputError),
     #[error("too many frames ({frames}) at {fps} fps: key times are not strictly increasing")]
     TimesNotIncreasing { frames: usize, fps: f32 },
-    #[error("bad options: {0}")]
-    Options(String),
-    #[error("no dancers to export")]
-    NoDancers,
-    #[error(
-        "dancer {dancer} has {frames} frames but dancer 0 has {first}; dancers in one file share \
-         one timeline"
-    )]
-    FrameCountMismatch {
-        dancer: usize,
-        frames: usize,
-        first: usize,
-    },
-    /// Only used with several dancers, so the message says whose data is wrong.
-    #[error("dancer {dancer}: {reason}")]
-    Dancer {
-        dancer: usize,
-        reason: Box<GlbInputError>,
-    },
 }
 
 /// A `.glb` that could not be written; both variants name the path.
@@ -216,55 +181,19 @@ pub fn glb_bytes_multi(
     fps: f32,
     opts: &GlbOptions,
 ) -> Result<Vec<u8>, GlbInputError> {
-    if dancers.is_empty() {
-        return Err(GlbInputError::NoDancers);
-    }
     let joints = skeleton.len();
     let many = dancers.len() > 1;
-    let mut frames = 0;
-    for (d, dancer) in dancers.iter().enumerate() {
-        let f = check_dancer(joints, dancer).map_err(|e| {
-            if many {
-                GlbInputError::Dancer {
-                    dancer: d,
-                    reason: Box::new(e),
-                }
-            } else {
-                e
-            }
-        })?;
-        if d == 0 {
-            frames = f;
-        } else if f != frames {
-            return Err(GlbInputError::FrameCountMismatch {
-                dancer: d,
-                frames: f,
-                first: frames,
-            });
-        }
-    }
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(GlbInputError::BadFps(fps));
-    }
-    if opts.sides < 3 {
-        return Err(GlbInputError::Options(format!(
-            "sides must be at least 3, got {}",
-            opts.sides
-        )));
-    }
-    let positive = |v: f32| v.is_finite() && v > 0.0;
-    if !positive(opts.bone_radius) || !positive(opts.taper) {
-        return Err(GlbInputError::Options(format!(
-            "bone_radius and taper must be finite and positive, got {} and {}",
-            opts.bone_radius, opts.taper
-        )));
-    }
-    if opts.base_color.iter().any(|c| !(0.0..=1.0).contains(c)) {
-        return Err(GlbInputError::Options(format!(
-            "base_color components must lie in [0, 1], got {:?}",
-            opts.base_color
-        )));
-    }
+    let frames = check_scene(
+        joints,
+        dancers,
+        fps,
+        &CapsuleShape {
+            bone_radius: opts.bone_radius,
+            taper: opts.taper,
+            sides: opts.sides,
+        },
+        &opts.base_color,
+    )?;
 
     let times: Vec<f32> = (0..frames)
         .map(|f| (f as f64 / fps as f64) as f32)
@@ -505,32 +434,6 @@ pub fn glb_bytes_multi(
     ))
 }
 
-/// Validates one dancer's arrays and returns its frame count.
-fn check_dancer(joints: usize, dancer: &DancerAnimation<'_>) -> Result<usize, GlbInputError> {
-    let rot = dancer.local_rotations_axis_angle;
-    let root_translation = dancer.root_translation;
-    if !rot.len().is_multiple_of(joints * 3) {
-        return Err(GlbInputError::RotationShape {
-            len: rot.len(),
-            joints,
-        });
-    }
-    let frames = rot.len() / (joints * 3);
-    if frames == 0 {
-        return Err(GlbInputError::NoFrames);
-    }
-    if root_translation.len() != frames * 3 {
-        return Err(GlbInputError::TranslationShape {
-            frames,
-            got: root_translation.len(),
-            expected: frames * 3,
-        });
-    }
-    check_finite("rotation", rot)?;
-    check_finite("root translation", root_translation)?;
-    Ok(frames)
-}
-
 const FLOAT: u32 = 5126;
 const UNSIGNED_BYTE: u32 = 5121;
 const UNSIGNED_SHORT: u32 = 5123;
@@ -586,17 +489,6 @@ fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
-fn check_finite(what: &'static str, v: &[f32]) -> Result<(), GlbInputError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        Some(index) => Err(GlbInputError::NonFinite {
-            what,
-            index,
-            value: v[index],
-        }),
-        None => Ok(()),
-    }
-}
-
 fn min_max3(v: &[f32]) -> (Vec<f64>, Vec<f64>) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
@@ -622,24 +514,29 @@ mod tests {
         let o = GlbOptions::default();
         assert_eq!(
             glb_bytes(&sk, &[], &[], 30.0, &o),
-            Err(GlbInputError::NoFrames)
+            Err(GlbInputError::Scene(SceneInputError::NoFrames))
         );
         let rot = vec![0.0f32; 24 * 3];
         assert!(matches!(
             glb_bytes(&sk, &rot[1..], &[0.0; 3], 30.0, &o),
-            Err(GlbInputError::RotationShape { .. })
+            Err(GlbInputError::Scene(SceneInputError::RotationShape { .. }))
         ));
         assert!(matches!(
             glb_bytes(&sk, &rot, &[0.0; 6], 30.0, &o),
-            Err(GlbInputError::TranslationShape { .. })
+            Err(GlbInputError::Scene(
+                SceneInputError::TranslationShape { .. }
+            ))
         ));
         assert!(matches!(
             glb_bytes(&sk, &rot, &[0.0, f32::NAN, 0.0], 30.0, &o),
-            Err(GlbInputError::NonFinite { index: 1, .. })
+            Err(GlbInputError::Scene(SceneInputError::NonFinite {
+                index: 1,
+                ..
+            }))
         ));
         assert_eq!(
             glb_bytes(&sk, &rot, &[0.0; 3], 0.0, &o),
-            Err(GlbInputError::BadFps(0.0))
+            Err(GlbInputError::Scene(SceneInputError::BadFps(0.0)))
         );
         assert!(glb_bytes(&sk, &rot, &[0.0; 3], 30.0, &o).is_ok());
     }

@@ -26,6 +26,7 @@ pub mod retarget;
 pub mod rig;
 pub mod rng;
 pub mod rotation;
+pub mod scene_input;
 pub mod skeleton;
 pub mod smoothing;
 pub mod smpl_npz;

@@ -14,6 +14,7 @@ use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
 use dancegen_motion::gltf::{DancerAnimation, EXTRA_DANCER_COLORS, GlbOptions, glb_bytes};
 use dancegen_motion::repr::SmplMotion;
 use dancegen_motion::rng::SplitMix64;
+use dancegen_motion::scene_input::SceneInputError;
 use dancegen_motion::skeleton::Skeleton;
 use std::f64::consts::PI;
 
@@ -533,28 +534,42 @@ fn bad_inputs_are_errors_not_panics() {
             o,
         )
     };
-    assert_eq!(one(&[], &[], 30.0, &o), Err(FbxInputError::NoFrames));
+    assert_eq!(
+        one(&[], &[], 30.0, &o),
+        Err(FbxInputError::Scene(SceneInputError::NoFrames))
+    );
     assert!(matches!(
         one(&rot[1..], &tr, 30.0, &o),
-        Err(FbxInputError::RotationShape { .. })
+        Err(FbxInputError::Scene(SceneInputError::RotationShape { .. }))
     ));
     assert!(matches!(
         one(&rot, &tr[..3], 30.0, &o),
-        Err(FbxInputError::TranslationShape { .. })
+        Err(FbxInputError::Scene(
+            SceneInputError::TranslationShape { .. }
+        ))
     ));
     let mut nan = rot.clone();
     nan[5] = f32::NAN;
     assert!(matches!(
         one(&nan, &tr, 30.0, &o),
-        Err(FbxInputError::NonFinite { index: 5, .. })
+        Err(FbxInputError::Scene(SceneInputError::NonFinite {
+            index: 5,
+            ..
+        }))
     ));
     assert!(matches!(
         one(&rot, &[0.0, 0.0, f32::INFINITY, 0.0, 0.0, 0.0], 30.0, &o),
-        Err(FbxInputError::NonFinite { index: 2, .. })
+        Err(FbxInputError::Scene(SceneInputError::NonFinite {
+            index: 2,
+            ..
+        }))
     ));
     for fps in [0.0, -30.0, f32::NAN, f32::INFINITY] {
         assert!(
-            matches!(one(&rot, &tr, fps, &o), Err(FbxInputError::BadFps(_))),
+            matches!(
+                one(&rot, &tr, fps, &o),
+                Err(FbxInputError::Scene(SceneInputError::BadFps(_)))
+            ),
             "fps {fps}"
         );
     }
@@ -567,7 +582,10 @@ fn bad_inputs_are_errors_not_panics() {
         one(&rot, &tr, 1e-12, &o),
         Err(FbxInputError::TimeOutOfRange { .. })
     ));
-    assert_eq!(fbx_bytes(&sk, &[], 30.0, &o), Err(FbxInputError::NoDancers));
+    assert_eq!(
+        fbx_bytes(&sk, &[], 30.0, &o),
+        Err(FbxInputError::Scene(SceneInputError::NoDancers))
+    );
     let short = DancerAnimation {
         local_rotations_axis_angle: &rot[..72],
         root_translation: &tr[..3],
@@ -578,7 +596,10 @@ fn bad_inputs_are_errors_not_panics() {
     };
     assert!(matches!(
         fbx_bytes(&sk, &[full, short], 30.0, &o),
-        Err(FbxInputError::FrameCountMismatch { dancer: 1, .. })
+        Err(FbxInputError::Scene(SceneInputError::FrameCountMismatch {
+            dancer: 1,
+            ..
+        }))
     ));
     let broken = DancerAnimation {
         local_rotations_axis_angle: &rot[..71],
@@ -586,7 +607,10 @@ fn bad_inputs_are_errors_not_panics() {
     };
     assert!(matches!(
         fbx_bytes(&sk, &[full, broken], 30.0, &o),
-        Err(FbxInputError::Dancer { dancer: 1, .. })
+        Err(FbxInputError::Scene(SceneInputError::Dancer {
+            dancer: 1,
+            ..
+        }))
     ));
     for bad in [
         FbxOptions {
@@ -612,7 +636,7 @@ fn bad_inputs_are_errors_not_panics() {
     ] {
         assert!(matches!(
             one(&rot, &tr, 30.0, &bad),
-            Err(FbxInputError::Options(_))
+            Err(FbxInputError::Options(_) | FbxInputError::Scene(SceneInputError::Options(_)))
         ));
     }
     // The file API names the path and writes nothing.

@@ -14,6 +14,7 @@ use dancegen_motion::aistpp::load_motion;
 use dancegen_motion::fk::fk_axis_angle_f32;
 use dancegen_motion::gltf::{GlbInputError, GlbOptions, GltfError, glb_bytes, write_glb};
 use dancegen_motion::rotation::axis_angle_to_quat;
+use dancegen_motion::scene_input::SceneInputError;
 use dancegen_motion::skeleton::Skeleton;
 use serde_json::Value;
 
@@ -465,7 +466,7 @@ fn errors_name_the_path() {
     assert!(matches!(
         err,
         GltfError::Input {
-            reason: GlbInputError::NoFrames,
+            reason: GlbInputError::Scene(SceneInputError::NoFrames),
             ..
         }
     ));

@@ -13,6 +13,7 @@ use dancegen_motion::gltf::{
     write_glb_multi,
 };
 use dancegen_motion::repr::SmplMotion;
+use dancegen_motion::scene_input::SceneInputError;
 use dancegen_motion::skeleton::Skeleton;
 use serde_json::{Value, json};
 
@@ -240,13 +241,13 @@ fn input_errors() {
     let b = motion(2, 24, 1.0);
     assert_eq!(
         glb_bytes_multi(&sk, &[dancer(&a), dancer(&b)], 30.0, &o),
-        Err(GlbInputError::FrameCountMismatch {
+        Err(GlbInputError::Scene(SceneInputError::FrameCountMismatch {
             dancer: 1,
             frames: 2,
             first: 3
-        })
+        }))
     );
-    let msg = GlbInputError::FrameCountMismatch {
+    let msg = SceneInputError::FrameCountMismatch {
         dancer: 1,
         frames: 2,
         first: 3,
@@ -255,20 +256,22 @@ fn input_errors() {
     assert!(msg.contains('2') && msg.contains('3'), "{msg}");
     assert_eq!(
         glb_bytes_multi(&sk, &[], 30.0, &o),
-        Err(GlbInputError::NoDancers)
+        Err(GlbInputError::Scene(SceneInputError::NoDancers))
     );
     let bad = (a.0.clone(), vec![0.0; 6]);
     let e = glb_bytes_multi(&sk, &[dancer(&a), dancer(&bad)], 30.0, &o).unwrap_err();
     assert!(
-        matches!(&e, GlbInputError::Dancer { dancer: 1, reason }
-            if matches!(**reason, GlbInputError::TranslationShape { .. })),
+        matches!(&e, GlbInputError::Scene(SceneInputError::Dancer { dancer: 1, reason })
+            if matches!(**reason, SceneInputError::TranslationShape { .. })),
         "{e:?}"
     );
     assert!(e.to_string().starts_with("dancer 1: "), "{e}");
     // One dancer: errors are not wrapped, as from `glb_bytes`.
     assert!(matches!(
         glb_bytes_multi(&sk, &[dancer(&bad)], 30.0, &o),
-        Err(GlbInputError::TranslationShape { .. })
+        Err(GlbInputError::Scene(
+            SceneInputError::TranslationShape { .. }
+        ))
     ));
 }
 

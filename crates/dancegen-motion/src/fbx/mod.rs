@@ -63,7 +63,9 @@ mod scene;
 mod sections;
 mod tree;
 
+use crate::capsule_mesh::CapsuleShape;
 use crate::gltf::DancerAnimation;
+use crate::scene_input::{SceneInputError, check_scene};
 use crate::skeleton::Skeleton;
 use std::path::{Path, PathBuf};
 
@@ -101,53 +103,20 @@ impl Default for FbxOptions {
     }
 }
 
-/// Why the inputs cannot be exported.
+/// Why the inputs cannot be exported as FBX.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FbxInputError {
-    #[error("motion has no frames (a single-frame pose is fine, zero frames is not)")]
-    NoFrames,
-    #[error(
-        "rotations have {len} values, not a multiple of {joints} joints × 3 (axis-angle, T×J×3)"
-    )]
-    RotationShape { len: usize, joints: usize },
-    #[error("{frames} frames of rotations but {got} root translation values (expected {expected})")]
-    TranslationShape {
-        frames: usize,
-        got: usize,
-        expected: usize,
-    },
-    #[error("{what} value {index} is not finite ({value})")]
-    NonFinite {
-        what: &'static str,
-        index: usize,
-        value: f32,
-    },
-    #[error("fps must be finite and positive, got {0}")]
-    BadFps(f32),
+    /// What every scene format checks ([`crate::scene_input`]).
+    #[error(transparent)]
+    Scene(#[from] SceneInputError),
     #[error(
         "{frames} frames at {fps} fps do not fit FBX time (1/46186158000 s ticks in 64 bits, \
          strictly increasing)"
     )]
     TimeOutOfRange { frames: usize, fps: f32 },
+    /// A name FBX cannot hold (NUL characters).
     #[error("bad options: {0}")]
     Options(String),
-    #[error("no dancers to export")]
-    NoDancers,
-    #[error(
-        "dancer {dancer} has {frames} frames but dancer 0 has {first}; dancers in one file share \
-         one timeline"
-    )]
-    FrameCountMismatch {
-        dancer: usize,
-        frames: usize,
-        first: usize,
-    },
-    /// Only used with several dancers, so the message says whose data is wrong.
-    #[error("dancer {dancer}: {reason}")]
-    Dancer {
-        dancer: usize,
-        reason: Box<FbxInputError>,
-    },
     #[error("the mesh or skeleton is too large for FBX's 32-bit indices ({0})")]
     TooLarge(String),
     /// The binary encoder failed (it writes to memory, so this is not expected).
@@ -255,55 +224,18 @@ fn check_inputs(
     fps: f32,
     opts: &FbxOptions,
 ) -> Result<usize, FbxInputError> {
-    if dancers.is_empty() {
-        return Err(FbxInputError::NoDancers);
-    }
     let joints = skeleton.len();
-    let many = dancers.len() > 1;
-    let mut frames = 0;
-    for (d, dancer) in dancers.iter().enumerate() {
-        let f = check_dancer(joints, dancer).map_err(|e| {
-            if many {
-                FbxInputError::Dancer {
-                    dancer: d,
-                    reason: Box::new(e),
-                }
-            } else {
-                e
-            }
-        })?;
-        if d == 0 {
-            frames = f;
-        } else if f != frames {
-            return Err(FbxInputError::FrameCountMismatch {
-                dancer: d,
-                frames: f,
-                first: frames,
-            });
-        }
-    }
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(FbxInputError::BadFps(fps));
-    }
-    if opts.sides < 3 {
-        return Err(FbxInputError::Options(format!(
-            "sides must be at least 3, got {}",
-            opts.sides
-        )));
-    }
-    let positive = |v: f32| v.is_finite() && v > 0.0;
-    if !positive(opts.bone_radius) || !positive(opts.taper) {
-        return Err(FbxInputError::Options(format!(
-            "bone_radius and taper must be finite and positive, got {} and {}",
-            opts.bone_radius, opts.taper
-        )));
-    }
-    if opts.base_color.iter().any(|c| !(0.0..=1.0).contains(c)) {
-        return Err(FbxInputError::Options(format!(
-            "base_color components must lie in [0, 1], got {:?}",
-            opts.base_color
-        )));
-    }
+    let frames = check_scene(
+        joints,
+        dancers,
+        fps,
+        &CapsuleShape {
+            bone_radius: opts.bone_radius,
+            taper: opts.taper,
+            sides: opts.sides,
+        },
+        &opts.base_color,
+    )?;
     if opts.animation_name.contains('\0') {
         return Err(FbxInputError::Options(
             "animation_name must not contain NUL characters".to_string(),
@@ -318,41 +250,4 @@ fn check_inputs(
         return Err(FbxInputError::TooLarge(format!("{joints} joints")));
     }
     Ok(frames)
-}
-
-/// Validates one dancer's arrays and returns its frame count.
-fn check_dancer(joints: usize, dancer: &DancerAnimation<'_>) -> Result<usize, FbxInputError> {
-    let rot = dancer.local_rotations_axis_angle;
-    let root_translation = dancer.root_translation;
-    if !rot.len().is_multiple_of(joints * 3) {
-        return Err(FbxInputError::RotationShape {
-            len: rot.len(),
-            joints,
-        });
-    }
-    let frames = rot.len() / (joints * 3);
-    if frames == 0 {
-        return Err(FbxInputError::NoFrames);
-    }
-    if root_translation.len() != frames * 3 {
-        return Err(FbxInputError::TranslationShape {
-            frames,
-            got: root_translation.len(),
-            expected: frames * 3,
-        });
-    }
-    check_finite("rotation", rot)?;
-    check_finite("root translation", root_translation)?;
-    Ok(frames)
-}
-
-fn check_finite(what: &'static str, v: &[f32]) -> Result<(), FbxInputError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        Some(index) => Err(FbxInputError::NonFinite {
-            what,
-            index,
-            value: v[index],
-        }),
-        None => Ok(()),
-    }
 }
