@@ -35,6 +35,7 @@
 //!   bone's parent joint (the joint whose rotation moves the bone).
 
 use crate::capsule_mesh::{CapsuleShape, build_capsule_mesh};
+use crate::glb_container::assemble_glb;
 use crate::rotation::Quat;
 use crate::scene_input::{SceneInputError, check_scene};
 use crate::skeleton::Skeleton;
@@ -77,6 +78,9 @@ pub enum GlbInputError {
     Scene(#[from] SceneInputError),
     #[error("too many frames ({frames}) at {fps} fps: key times are not strictly increasing")]
     TimesNotIncreasing { frames: usize, fps: f32 },
+    /// Over GLB's 32-bit sizes.
+    #[error("{0}")]
+    TooLarge(String),
 }
 
 /// A `.glb` that could not be written; both variants name the path.
@@ -428,10 +432,11 @@ pub fn glb_bytes_multi(
         "bufferViews": views,
         "accessors": accessors,
     });
-    Ok(assemble_glb(
+    assemble_glb(
         serde_json::to_vec(&doc).expect("JSON of plain values"),
         bin.data,
-    ))
+    )
+    .map_err(GlbInputError::TooLarge)
 }
 
 const FLOAT: u32 = 5126;
@@ -440,29 +445,6 @@ const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
-
-const GLB_MAGIC: u32 = 0x4654_6C67;
-const CHUNK_JSON: u32 = 0x4E4F_534A;
-const CHUNK_BIN: u32 = 0x004E_4942;
-
-fn assemble_glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Vec<u8> {
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    for v in [GLB_MAGIC, 2, total as u32, json.len() as u32, CHUNK_JSON] {
-        out.extend(v.to_le_bytes());
-    }
-    out.extend(&json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(CHUNK_BIN.to_le_bytes());
-    out.extend(&bin);
-    out
-}
 
 /// The binary buffer, each view starting at a multiple of 4.
 #[derive(Default)]

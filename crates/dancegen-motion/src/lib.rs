@@ -19,6 +19,7 @@ pub mod foot_ik;
 pub mod foot_lock;
 pub mod formation;
 pub mod formats;
+pub(crate) mod glb_container;
 pub mod gltf;
 pub mod pickle;
 pub mod repr;

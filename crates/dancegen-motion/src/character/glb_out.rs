@@ -31,6 +31,7 @@ use super::Character;
 use super::error::CharacterError;
 use super::gltf_in::array;
 use super::retarget::RetargetedAnimation;
+use crate::glb_container::assemble_glb;
 
 /// Name of the written animation (Blender shows it as the action name).
 pub const ANIMATION_NAME: &str = "dance";
@@ -65,9 +66,6 @@ pub const KNOWN_EXTENSIONS: &[&str] = &[
 ];
 
 const FLOAT: u32 = 5126;
-const GLB_MAGIC: u32 = 0x4654_6C67;
-const CHUNK_JSON: u32 = 0x4E4F_534A;
-const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Writes the character with the dance to `path` as a GLB, atomically.
 pub fn write_glb(
@@ -657,25 +655,4 @@ impl Bin {
 
 fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
-
-fn assemble_glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, String> {
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let total32 = u32::try_from(total)
-        .map_err(|_| format!("the output would be {total} bytes, over GLB's 4 GiB limit"))?;
-    let mut out = Vec::with_capacity(total);
-    for v in [GLB_MAGIC, 2, total32, json.len() as u32, CHUNK_JSON] {
-        out.extend(v.to_le_bytes());
-    }
-    out.extend(&json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(CHUNK_BIN.to_le_bytes());
-    out.extend(&bin);
-    Ok(out)
 }

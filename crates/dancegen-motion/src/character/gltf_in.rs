@@ -14,6 +14,7 @@ use base64::Engine;
 use serde_json::Value;
 
 use super::error::CharacterError;
+use crate::glb_container::{CHUNK_BIN, CHUNK_JSON};
 
 /// A glTF document with its binary data resolved.
 #[derive(Debug, Clone)]
@@ -34,9 +35,8 @@ pub(crate) struct ImageBytes {
     pub mime_type: String,
 }
 
+/// The GLB magic as the file's first bytes.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
-const CHUNK_JSON: u32 = 0x4E4F_534A;
-const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Reads a character file from disk; external buffers and images are resolved next to it.
 pub(crate) fn read_gltf(path: &Path) -> Result<GltfAsset, CharacterError> {
@@ -385,27 +385,7 @@ mod tests {
     use super::*;
 
     fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-        let mut j = json.as_bytes().to_vec();
-        while !j.len().is_multiple_of(4) {
-            j.push(b' ');
-        }
-        let mut b = bin.to_vec();
-        while !b.len().is_multiple_of(4) {
-            b.push(0);
-        }
-        let total = 12 + 8 + j.len() + if b.is_empty() { 0 } else { 8 + b.len() };
-        let mut out = b"glTF".to_vec();
-        out.extend(2u32.to_le_bytes());
-        out.extend((total as u32).to_le_bytes());
-        out.extend((j.len() as u32).to_le_bytes());
-        out.extend(CHUNK_JSON.to_le_bytes());
-        out.extend(&j);
-        if !b.is_empty() {
-            out.extend((b.len() as u32).to_le_bytes());
-            out.extend(CHUNK_BIN.to_le_bytes());
-            out.extend(&b);
-        }
-        out
+        crate::glb_container::assemble_glb(json.as_bytes().to_vec(), bin.to_vec()).unwrap()
     }
 
     #[test]
