@@ -89,6 +89,13 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                     path.display()
                 );
             }
+            // Checked before any work: a .glb of several dancers cannot be one character.
+            if group || (duet && !args.follower_only) {
+                bail!(
+                    "--character puts one dancer on the character: with a leader add \
+                     --follower-only; a group has several dancers"
+                );
+            }
             Some(std::sync::Arc::new(Character::load(path)?))
         }
     };

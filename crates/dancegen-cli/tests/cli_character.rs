@@ -143,6 +143,24 @@ fn characters_that_cannot_dance_are_named() {
         ours.to_str().unwrap(),
     ]));
 
+    // Several dancers cannot be one character: refused before any generation.
+    let leader = shared().join("data/cmu-salsa/61_13_scaled.bvh");
+    let o = dancegen(&[
+        "generate",
+        "--leader",
+        leader.to_str().unwrap(),
+        "--character",
+        &robot(),
+        "-o",
+        out_s,
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--follower-only"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+
     let bvh = dir.path().join("x.bvh");
     let e = run(&robot(), &[bvh.to_str().unwrap()]);
     assert!(e.contains("add -o NAME.glb"), "{e}");
