@@ -70,6 +70,17 @@ impl Default for GlbOptions {
     }
 }
 
+impl GlbOptions {
+    /// The body's shape part of the options.
+    pub(crate) fn capsule_shape(&self) -> CapsuleShape {
+        CapsuleShape {
+            bone_radius: self.bone_radius,
+            taper: self.taper,
+            sides: self.sides,
+        }
+    }
+}
+
 /// Why the inputs cannot be exported as glTF.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GlbInputError {
@@ -191,11 +202,7 @@ pub fn glb_bytes_multi(
         joints,
         dancers,
         fps,
-        &CapsuleShape {
-            bone_radius: opts.bone_radius,
-            taper: opts.taper,
-            sides: opts.sides,
-        },
+        &opts.capsule_shape(),
         &opts.base_color,
     )?;
 
@@ -216,15 +223,7 @@ pub fn glb_bytes_multi(
             Some(p) => add(rest[p], offsets[j]),
         });
     }
-    let mesh = build_capsule_mesh(
-        skeleton,
-        &rest,
-        CapsuleShape {
-            bone_radius: opts.bone_radius,
-            taper: opts.taper,
-            sides: opts.sides,
-        },
-    );
+    let mesh = build_capsule_mesh(skeleton, &rest, opts.capsule_shape());
 
     let mut bin = BinBuilder::default();
     let mut accessors: Vec<Value> = Vec::new();

@@ -63,7 +63,6 @@ mod scene;
 mod sections;
 mod tree;
 
-use crate::capsule_mesh::CapsuleShape;
 use crate::gltf::DancerAnimation;
 use crate::scene_input::{SceneInputError, check_scene};
 use crate::skeleton::Skeleton;
@@ -75,33 +74,9 @@ pub const KTIME_PER_SECOND: i64 = 46_186_158_000;
 /// Centimetres per file unit written as `UnitScaleFactor`: the file's numbers are metres.
 pub const UNIT_SCALE_FACTOR: f64 = 100.0;
 
-/// Appearance and naming of the exported figure (the same knobs as [`crate::gltf::GlbOptions`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct FbxOptions {
-    /// Capsule radius at the parent end of each bone, metres (capped at 35% of the bone length).
-    pub bone_radius: f32,
-    /// Radius at the child end relative to the parent end (1 = cylinder).
-    pub taper: f32,
-    /// Sides of each capsule (at least 3).
-    pub sides: usize,
-    /// Linear RGB(A) diffuse colour of dancer 0's material (alpha is ignored).
-    pub base_color: [f32; 4],
-    /// Name of the animation stack (Blender shows it in the action name).
-    pub animation_name: String,
-}
-
-impl Default for FbxOptions {
-    fn default() -> Self {
-        let g = crate::gltf::GlbOptions::default();
-        FbxOptions {
-            bone_radius: g.bone_radius,
-            taper: g.taper,
-            sides: g.sides,
-            base_color: g.base_color,
-            animation_name: g.animation_name,
-        }
-    }
-}
+/// Appearance and naming of the exported figure: the same capsule body, colours and animation
+/// name as the `.glb` ([`crate::gltf::GlbOptions`]), so both files show the same figure.
+pub type FbxOptions = crate::gltf::GlbOptions;
 
 /// Why the inputs cannot be exported as FBX.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -229,11 +204,7 @@ fn check_inputs(
         joints,
         dancers,
         fps,
-        &CapsuleShape {
-            bone_radius: opts.bone_radius,
-            taper: opts.taper,
-            sides: opts.sides,
-        },
+        &opts.capsule_shape(),
         &opts.base_color,
     )?;
     if opts.animation_name.contains('\0') {

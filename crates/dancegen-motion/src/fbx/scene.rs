@@ -8,7 +8,7 @@ use super::tree::{
     Node, object_name, p_bool, p_color_a, p_enum, p_int, p_ktime, p_lcl, p_number, s,
 };
 use super::{FbxInputError, FbxOptions};
-use crate::capsule_mesh::{CapsuleShape, build_capsule_mesh};
+use crate::capsule_mesh::build_capsule_mesh;
 use crate::gltf::{DancerAnimation, EXTRA_DANCER_COLORS};
 use crate::rotation::Mat3;
 use crate::skeleton::Skeleton;
@@ -125,11 +125,7 @@ impl Body {
                 Some(p) => add(rest[p], offsets[j]),
             });
         }
-        let shape = CapsuleShape {
-            bone_radius: opts.bone_radius,
-            taper: opts.taper,
-            sides: opts.sides,
-        };
+        let shape = opts.capsule_shape();
         let mesh = build_capsule_mesh(skeleton, &rest, shape);
         if mesh.indices.len() > i32::MAX as usize {
             let n = mesh.indices.len();
