@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 pub use bone_map::{Aim, BoneMap, Convention, MappedBone, Site};
 pub use error::CharacterError;
 pub use glb_out::{ANIMATION_NAME, KNOWN_EXTENSIONS, glb_bytes, write_glb};
-pub use names::{NameTable, Part, SMPL_OFFICIAL_NAMES, Side, classify};
+pub use names::{NameTable, Part, Side, classify, smpl_official_name};
 pub use retarget::{FLOOR_PERCENTILE, NodeChannel, RetargetedAnimation, retarget};
 pub use scene::NodeTree;
 pub use transform::{Affine, Trs};

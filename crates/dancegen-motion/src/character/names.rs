@@ -267,36 +267,20 @@ fn dancegen_spelling(name: &str) -> Option<&'static str> {
     let i = crate::skeleton::SMPL24_NAMES
         .iter()
         .position(|n| n.eq_ignore_ascii_case(local))?;
-    Some(SMPL_OFFICIAL_NAMES[i])
+    smpl_official_name(i)
 }
 
-/// SMPL's joint names as its model files spell them, in SMPL 24 order.
-pub const SMPL_OFFICIAL_NAMES: [&str; 24] = [
-    "pelvis",
-    "left_hip",
-    "right_hip",
-    "spine1",
-    "left_knee",
-    "right_knee",
-    "spine2",
-    "left_ankle",
-    "right_ankle",
-    "spine3",
-    "left_foot",
-    "right_foot",
-    "neck",
-    "left_collar",
-    "right_collar",
-    "head",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_hand",
-    "right_hand",
-];
+/// SMPL joint `i`'s name as the model files spell it: the 22 body joints SMPL, SMPL-H and
+/// SMPL-X share ([`crate::skeleton::SMPLX55_NAMES`]), then SMPL's own hand joints.
+pub fn smpl_official_name(i: usize) -> Option<&'static str> {
+    /// SMPL's joints 22 and 23 (SMPL-H/X put fingers and the jaw there instead).
+    const SMPL_HANDS: [&str; 2] = ["left_hand", "right_hand"];
+    match i {
+        0..22 => Some(crate::skeleton::SMPLX55_NAMES[i]),
+        22..24 => Some(SMPL_HANDS[i - 22]),
+        _ => None,
+    }
+}
 
 /// Whether a set of names reads as SMPL's: a sided collar, elbow and knee, which no other
 /// common convention has together.
@@ -389,7 +373,7 @@ mod tests {
         assert_eq!(s("neck"), Some((Neck, Center)));
         assert_eq!(s("head"), Some((Head, Center)));
         assert!(looks_like_smpl(crate::skeleton::SMPL24_NAMES));
-        assert!(looks_like_smpl(SMPL_OFFICIAL_NAMES));
+        assert!(looks_like_smpl((0..24).filter_map(smpl_official_name)));
         assert!(!looks_like_smpl([
             "mixamorig:LeftShoulder",
             "mixamorig:LeftLeg"
