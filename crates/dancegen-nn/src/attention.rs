@@ -16,6 +16,7 @@ use burn::tensor::ops::AttentionModuleOptions;
 use burn::tensor::{Bool, Tensor};
 
 use crate::host_attention::{self, HostKv};
+use crate::host_linear;
 use std::sync::Arc;
 
 /// Configuration of [`MultiHeadAttention`].
@@ -95,9 +96,9 @@ impl MultiHeadAttention {
         value: Tensor<3>,
         masks: &AttnMasks,
     ) -> Tensor<3> {
-        let q = self.q_proj.forward(query);
-        let k = self.k_proj.forward(key);
-        let v = self.v_proj.forward(value);
+        let q = host_linear::forward(&self.q_proj, query);
+        let k = host_linear::forward(&self.k_proj, key);
+        let v = host_linear::forward(&self.v_proj, value);
         if host_attention::eligible(&q) {
             let kv = HostKv::new(k, v);
             return self.host(q, &kv, masks);
@@ -113,8 +114,8 @@ impl MultiHeadAttention {
     /// The key/value projections of a context that stays the same over many calls (the music of
     /// a diffusion sampler's every step), for [`Self::forward_projected`].
     pub fn project_kv(&self, key: Tensor<3>, value: Tensor<3>) -> ProjectedKv {
-        let k = self.k_proj.forward(key);
-        let v = self.v_proj.forward(value);
+        let k = host_linear::forward(&self.k_proj, key);
+        let v = host_linear::forward(&self.v_proj, value);
         let host =
             host_attention::eligible(&k).then(|| Arc::new(HostKv::new(k.clone(), v.clone())));
         ProjectedKv { k, v, host }
@@ -127,7 +128,7 @@ impl MultiHeadAttention {
         kv: &ProjectedKv,
         masks: &AttnMasks,
     ) -> Tensor<3> {
-        let q = self.q_proj.forward(query);
+        let q = host_linear::forward(&self.q_proj, query);
         if let Some(host) = &kv.host
             && host_attention::eligible(&q)
         {
@@ -150,7 +151,8 @@ impl MultiHeadAttention {
             masks.attn.as_ref(),
             masks.key_padding.as_ref(),
         );
-        self.dropout.forward(self.out_proj.forward(out))
+        self.dropout
+            .forward(host_linear::forward(&self.out_proj, out))
     }
 
     /// Attention on already projected, head-split `q` `[B, H, Tq, dh]`, `k`/`v` `[B, H, Tk, dh]`
@@ -161,7 +163,8 @@ impl MultiHeadAttention {
         let mask = combined_mask(masks, b, h, tq, tk);
         let out = attention(q, k, v, mask, None, AttentionModuleOptions::default());
         let out = out.swap_dims(1, 2).reshape([b, tq, h * dh]);
-        self.dropout.forward(self.out_proj.forward(out))
+        self.dropout
+            .forward(host_linear::forward(&self.out_proj, out))
     }
 
     /// `[B, T, d]` → `[B, H, T, d / H]`.

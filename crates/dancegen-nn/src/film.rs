@@ -7,7 +7,6 @@ use burn::config::Config;
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::Tensor;
-use burn::tensor::activation::mish;
 
 /// Configuration of [`Film`].
 #[derive(Config, Debug)]
@@ -34,10 +33,7 @@ impl Film {
     /// `(scale, shift)`, each shaped like `cond`: `[B, 1, d]` (one vector per sequence) or
     /// `[B, T, d]` (one per frame).
     pub fn scale_shift(&self, cond: Tensor<3>) -> (Tensor<3>, Tensor<3>) {
-        let m = match crate::vector_math::mish_tensor(cond.clone()) {
-            Some(m) => m,
-            None => mish(cond),
-        };
+        let m = crate::vector_math::mish_tensor(cond);
         let ss = self.linear.forward(m);
         let d = ss.dims()[2] / 2;
         (ss.clone().narrow(2, 0, d), ss.narrow(2, d, d))

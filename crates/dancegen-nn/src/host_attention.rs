@@ -16,47 +16,39 @@
 //! Semantics match Burn's attention: scale `1/√dh`, blocked scores are −∞, a fully blocked
 //! row gives zeros; NaN scores propagate.
 
-use burn::tensor::{Bool, DType, Device, Tensor, TensorData};
+use burn::tensor::{Bool, Tensor, TensorData};
 use gemm::Parallelism;
 use rayon::prelude::*;
 
-use crate::vector_math::{exp, widest};
+use crate::host_linear::repeat_rows;
+use crate::host_view::HostF32;
+use crate::vector_math::{exp_nonpositive, widest};
 
-/// Whether a tensor can take the host path: plain `f32` on the flex CPU backend (a GPU
-/// tensor keeps Burn's op), no autodiff.
-pub fn eligible(t: &Tensor<3>) -> bool {
-    !t.is_autodiff() && t.dtype() == DType::F32 && t.device() == Device::flex()
-}
+pub use crate::host_view::eligible;
 
 /// Projected keys and values `[B, Tk, d]` on the host.
 #[derive(Clone, Debug)]
 pub struct HostKv {
-    k: Vec<f32>,
-    v: Vec<f32>,
+    k: HostF32,
+    v: HostF32,
     b: usize,
     tk: usize,
     d: usize,
 }
 
 impl HostKv {
-    /// Takes `k`, `v` `[B, Tk, d]` ([`eligible`] tensors); no copy when nothing else holds them.
+    /// Views `k`, `v` `[B, Tk, d]` ([`eligible`] tensors) without copying them.
     pub fn new(k: Tensor<3>, v: Tensor<3>) -> HostKv {
         let [b, tk, d] = k.dims();
         assert_eq!(v.dims(), [b, tk, d], "keys and values disagree");
         HostKv {
-            k: host_vec(k),
-            v: host_vec(v),
+            k: HostF32::new(&k),
+            v: HostF32::new(&v),
             b,
             tk,
             d,
         }
     }
-}
-
-fn host_vec(t: Tensor<3>) -> Vec<f32> {
-    t.into_data()
-        .try_into_vec::<f32>()
-        .expect("host attention takes f32 tensors")
 }
 
 /// Attention of `q` `[B, Tq, d]` ([`eligible`]) over `kv` with `heads` heads, on the host.
@@ -78,7 +70,7 @@ pub fn attention(
         kv.d
     );
     let device = q.device();
-    let q = host_vec(q);
+    let q = HostF32::new(&q);
     let shape = Shape {
         b,
         tq,
@@ -97,7 +89,13 @@ pub fn attention(
         attn: attn_mask.map(bools),
         key_padding: key_padding.map(bools),
     };
-    let out = attend(&q, &kv.k, &kv.v, &shape, &masks);
+    let out = attend(
+        q.as_slice(),
+        kv.k.as_slice(),
+        kv.v.as_slice(),
+        &shape,
+        &masks,
+    );
     Tensor::from_data(TensorData::new(out, [b, tq, d]), &device)
 }
 
@@ -118,6 +116,14 @@ struct Masks {
     key_padding: Option<Vec<bool>>,
 }
 
+/// Query rows per task, so that a batch of one or two sequences (LGDS denoises one window at
+/// a time) still gives both cores work. Blocking does not speed up a tall batch: on the
+/// parallel sampler's shape (46 × 750 tokens, d 128, 4 heads, 2 threads) one call took 88–90 ms
+/// unblocked, 91 ms at 256 rows, 94 ms at 128 and 102 ms at 64 (a throwaway timing test,
+/// 5 calls each, release build; the K and V panels are re-packed per block), so the block is
+/// the largest that still splits a 750-token window three ways.
+const QUERY_BLOCK: usize = 256;
+
 /// The kernel on flat row-major `[B, T, d]` slices; output `[B, Tq, d]`.
 fn attend(q: &[f32], k: &[f32], v: &[f32], s: &Shape, masks: &Masks) -> Vec<f32> {
     let Shape {
@@ -130,27 +136,44 @@ fn attend(q: &[f32], k: &[f32], v: &[f32], s: &Shape, masks: &Masks) -> Vec<f32>
     assert_eq!(d % heads, 0, "d {d} not divisible by {heads} heads");
     let dh = d / heads;
     let scale = 1.0 / (dh as f32).sqrt();
-    let mut out = vec![0f32; b * tq * d];
-    if out.is_empty() {
+    // Zeroed on the rayon workers (a memset on the calling thread left them idle).
+    let mut out = repeat_rows(&vec![0f32; d], b * tq);
+    if out.is_empty() || tk == 0 {
         return out;
     }
-    if tk == 0 {
-        return out;
+    // Batch elements whose keys are all unpadded skip the per-row masking.
+    let padded: Vec<bool> = (0..b)
+        .map(|bi| {
+            masks
+                .key_padding
+                .as_ref()
+                .is_some_and(|m| m[bi * tk..(bi + 1) * tk].iter().any(|&x| x))
+        })
+        .collect();
+    // One task per (batch element, block of query rows); its heads write disjoint columns of
+    // its rows of the output.
+    let mut tasks: Vec<(usize, usize, &mut [f32])> = Vec::new();
+    for (bi, out_b) in out.chunks_mut(tq * d).enumerate() {
+        for (blk, rows) in out_b.chunks_mut(QUERY_BLOCK * d).enumerate() {
+            tasks.push((bi, blk * QUERY_BLOCK, rows));
+        }
     }
-    // One task per batch element (its heads write disjoint columns of one output block).
-    out.par_chunks_mut(tq * d).enumerate().for_each_init(
-        || (vec![0f32; tq * tk], vec![0f32; tq]),
-        |(scores, inv), (bi, out_b)| {
+    tasks.into_par_iter().for_each_init(
+        || (vec![0f32; QUERY_BLOCK * tk], vec![0f32; QUERY_BLOCK]),
+        |(scores, inv), (bi, row0, out_rows)| {
+            let rows = out_rows.len() / d;
+            let scores = &mut scores[..rows * tk];
+            let inv = &mut inv[..rows];
             for h in 0..heads {
-                let q0 = bi * tq * d + h * dh;
+                let q0 = (bi * tq + row0) * d + h * dh;
                 let kv0 = bi * tk * d + h * dh;
-                // scores[tq, tk] = scale · Q_h K_hᵀ
+                // scores[rows, tk] = scale · Q_h K_hᵀ
                 // SAFETY: every pointer/stride pair stays inside its slice: rows
-                // `0..tq` (`0..tk`) of `dh` columns starting at column `h·dh` of a
-                // `[T, d]` block; `scores` is `tq·tk`, `out_b` is `tq·d`.
+                // `row0..row0 + rows` (`0..tk`) of `dh` columns starting at column `h·dh` of a
+                // `[T, d]` block; `scores` is `rows·tk`, `out_rows` is `rows·d`.
                 unsafe {
                     gemm::gemm(
-                        tq,
+                        rows,
                         tk,
                         dh,
                         scores.as_mut_ptr(),
@@ -171,19 +194,19 @@ fn attend(q: &[f32], k: &[f32], v: &[f32], s: &Shape, masks: &Masks) -> Vec<f32>
                         Parallelism::None,
                     );
                 }
-                if masks.attn.is_some() || masks.key_padding.is_some() {
-                    for (qi, row) in scores.chunks_exact_mut(tk).enumerate() {
-                        block(row, qi, bi, tk, masks);
+                if masks.attn.is_some() || padded[bi] {
+                    for (i, row) in scores.chunks_exact_mut(tk).enumerate() {
+                        block(row, row0 + i, bi, tk, masks);
                     }
                 }
                 softmax_rows(scores, inv, tk);
-                // out[:, h·dh..] = scores V_h
+                // out[rows, h·dh..] = scores V_h
                 unsafe {
                     gemm::gemm(
-                        tq,
+                        rows,
                         dh,
                         tk,
-                        out_b.as_mut_ptr().add(h * dh),
+                        out_rows.as_mut_ptr().add(h * dh),
                         1,
                         d as isize,
                         false,
@@ -201,7 +224,7 @@ fn attend(q: &[f32], k: &[f32], v: &[f32], s: &Shape, masks: &Masks) -> Vec<f32>
                         Parallelism::None,
                     );
                 }
-                scale_rows(out_b, inv, d, h * dh, dh);
+                scale_rows(out_rows, inv, d, h * dh, dh);
             }
         },
     );
@@ -258,10 +281,7 @@ fn softmax_rows_portable(scores: &mut [f32], inv: &mut [f32], tk: usize) {
             *inv = fill;
             continue;
         }
-        for x in row.iter_mut() {
-            *x = exp(*x - max);
-        }
-        *inv = 1.0 / lane_reduce(row, 0.0, |a, b| a + b, |a, b| a + b);
+        *inv = 1.0 / exp_sum(row, max);
     }
 }
 
@@ -272,6 +292,32 @@ fn scale_rows_portable(out: &mut [f32], inv: &[f32], stride: usize, col: usize, 
             *x *= s;
         }
     }
+}
+
+/// Replaces every `x` of `row` by `exp(x − max)` (`max` is the row's maximum, so the argument
+/// is ≤ 0) and returns their sum, in one pass (with
+/// `LANES` partial sums so that the loop vectorises).
+#[inline(always)]
+fn exp_sum(row: &mut [f32], max: f32) -> f32 {
+    let mut acc = [0f32; LANES];
+    let mut chunks = row.chunks_exact_mut(LANES);
+    for c in &mut chunks {
+        for (a, x) in acc.iter_mut().zip(c) {
+            *x = exp_nonpositive(*x - max);
+            *a += *x;
+        }
+    }
+    // The tail as one more full vector, padded with −∞ (which gives 0): a scalar loop over
+    // the 14 left of a 750-long row took a third of this function's time.
+    let rest = chunks.into_remainder();
+    let mut pad = [f32::NEG_INFINITY; LANES];
+    pad[..rest.len()].copy_from_slice(rest);
+    for (a, x) in acc.iter_mut().zip(&mut pad) {
+        *x = exp_nonpositive(*x - max);
+        *a += *x;
+    }
+    rest.copy_from_slice(&pad[..rest.len()]);
+    acc.into_iter().fold(0.0, |a, b| a + b)
 }
 
 /// `fold` over `LANES` independent accumulators, then `merge`d: a reduction LLVM can keep in
@@ -290,8 +336,14 @@ fn lane_reduce(
             *a = fold(*a, x);
         }
     }
-    let tail = chunks.remainder().iter().fold(init, |a, &x| fold(a, x));
-    acc.into_iter().fold(tail, merge)
+    // The tail as one more full vector, padded with `init`.
+    let rest = chunks.remainder();
+    let mut pad = [init; LANES];
+    pad[..rest.len()].copy_from_slice(rest);
+    for (a, &x) in acc.iter_mut().zip(&pad) {
+        *a = fold(*a, x);
+    }
+    acc.into_iter().fold(init, merge)
 }
 
 #[cfg(test)]
@@ -346,6 +398,31 @@ mod tests {
         let v = Tensor::<3>::random([3, 41, 24], n, &dev);
         let want = burn_reference(q.clone(), k.clone(), v.clone(), 4, None);
         let got = attention(q, &HostKv::new(k, v), 4, None, None);
+        assert!(max_abs_diff(got, want) < 1e-5);
+    }
+
+    #[test]
+    fn query_blocks_cover_every_row_with_masks() {
+        // Tq spans two whole query blocks and a partial one; the causal mask's row index must
+        // follow each block's offset, and the padded batch element must be masked in all.
+        let dev = Device::flex();
+        dev.seed(5);
+        let n = Distribution::Normal(0.0, 1.0);
+        let (b, t, d, h) = (2, 2 * QUERY_BLOCK + 7, 16, 2);
+        let q = Tensor::<3>::random([b, t, d], n, &dev);
+        let k = Tensor::<3>::random([b, t, d], n, &dev);
+        let v = Tensor::<3>::random([b, t, d], n, &dev);
+        let causal: Vec<bool> = (0..t * t).map(|i| i % t > i / t).collect();
+        let causal = Tensor::<2, Bool>::from_data(TensorData::new(causal, [t, t]), &dev);
+        let pad: Vec<bool> = (0..b * t).map(|i| i / t == 0 && i % t >= t - 20).collect();
+        let pad = Tensor::<2, Bool>::from_data(TensorData::new(pad, [b, t]), &dev);
+        let full = causal
+            .clone()
+            .reshape([1, 1, t, t])
+            .expand([b, h, t, t])
+            .bool_or(pad.clone().reshape([b, 1, 1, t]).expand([b, h, t, t]));
+        let want = burn_reference(q.clone(), k.clone(), v.clone(), h, Some(full));
+        let got = attention(q, &HostKv::new(k, v), h, Some(&causal), Some(&pad));
         assert!(max_abs_diff(got, want) < 1e-5);
     }
 

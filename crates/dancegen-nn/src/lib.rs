@@ -24,6 +24,8 @@ pub mod edge151;
 pub mod film;
 pub mod gpt;
 pub mod host_attention;
+pub mod host_linear;
+pub mod host_view;
 pub mod loss;
 pub mod mask;
 pub mod masked;

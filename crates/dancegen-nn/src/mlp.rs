@@ -1,10 +1,11 @@
 //! Feed-forward blocks and norms.
 
+use crate::host_linear;
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::{Dropout, DropoutConfig, Linear, LinearConfig};
 use burn::tensor::Tensor;
-use burn::tensor::activation::{gelu, mish, relu, silu};
+use burn::tensor::activation::{relu, silu};
 
 /// Activation of an [`Mlp`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
@@ -21,13 +22,10 @@ pub enum Activation {
 impl Activation {
     pub fn apply<const D: usize>(self, x: Tensor<D>) -> Tensor<D> {
         match self {
-            // Burn's erf is scalar libm; without autodiff the vectorised one is used.
-            Activation::Gelu => match crate::vector_math::gelu_tensor(x.clone()) {
-                Some(y) => y,
-                None => gelu(x),
-            },
+            // Burn's erf and Mish are scalar libm; without autodiff the vectorised ones run.
+            Activation::Gelu => crate::vector_math::gelu_tensor(x),
             Activation::Relu => relu(x),
-            Activation::Mish => mish(x),
+            Activation::Mish => crate::vector_math::mish_tensor(x),
             Activation::Silu => silu(x),
         }
     }
@@ -68,7 +66,9 @@ impl MlpConfig {
 
 impl Mlp {
     pub fn forward<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
-        let h = self.activation.apply(self.linear1.forward(x));
-        self.linear2.forward(self.dropout.forward(h))
+        let h = self
+            .activation
+            .apply(host_linear::forward(&self.linear1, x));
+        host_linear::forward(&self.linear2, self.dropout.forward(h))
     }
 }
