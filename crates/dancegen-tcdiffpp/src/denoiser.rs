@@ -44,6 +44,7 @@ use crate::footwork::FootworkAdaptor;
 use crate::fusion::FusionProjection;
 use crate::layout::{N_MAX, from_tokens, to_tokens, token_mask, token_padding};
 use crate::swap::SwapEmbedding;
+use dancegen_nn::host_linear;
 
 /// EDGE's music features per frame (`dancegen_music` EDGE-35).
 pub const MUSIC_DIMS: usize = 35;
@@ -238,9 +239,7 @@ impl GroupDenoiser {
         let device = x_t.device();
         let mask = token_mask(&c.dancers, frames, &device);
         let control = c.control.clone().reshape([b, frames * N_MAX, 1]);
-        let h = self
-            .input
-            .forward(Tensor::cat(vec![to_tokens(x_t), control], 2));
+        let h = host_linear::forward(&self.input, Tensor::cat(vec![to_tokens(x_t), control], 2));
         let mut h = (h + self.positions(frames, &device)) * mask.clone();
         if let Some(f) = &self.fusion {
             let fused = f.forward(h.clone(), mask.clone());
@@ -272,7 +271,7 @@ impl GroupDenoiser {
         for l in &self.ssm_layers {
             h = l.forward(h, &ctx) * mask.clone();
         }
-        let raw = self.output.forward(h);
+        let raw = host_linear::forward(&self.output, h);
         let out = match &self.footwork {
             Some(fa) => fa.forward(raw),
             None => raw,

@@ -13,10 +13,11 @@ use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, rot6d};
 
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
-use burn::tensor::activation::{leaky_relu, sigmoid};
+use burn::tensor::activation::leaky_relu;
 use burn::tensor::{Device, Tensor, TensorData};
 
 use crate::layout::N_MAX;
+use dancegen_nn::{host_linear, vector_math};
 
 /// SMPL joints whose rotations the adaptor replaces (released `model.py`: hips, spine1, knees,
 /// ankles, feet; the pelvis orientation is not among them).
@@ -46,8 +47,8 @@ impl ConcatSquashLinear {
     }
 
     pub fn forward(&self, x: Tensor<3>, ctx: Tensor<3>) -> Tensor<3> {
-        self.layer.forward(x) * sigmoid(self.hyper_gate.forward(ctx.clone()))
-            + self.hyper_bias.forward(ctx)
+        let gate = vector_math::sigmoid_tensor(host_linear::forward(&self.hyper_gate, ctx.clone()));
+        host_linear::forward(&self.layer, x) * gate + host_linear::forward(&self.hyper_bias, ctx)
     }
 }
 

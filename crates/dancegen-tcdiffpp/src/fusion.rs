@@ -15,6 +15,7 @@ use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
 use crate::layout::{N_MAX, from_tokens};
+use dancegen_nn::host_linear;
 
 #[derive(Module, Debug)]
 pub struct FusionProjection {
@@ -37,8 +38,8 @@ impl FusionProjection {
     pub fn forward(&self, tokens: Tensor<3>, mask: Tensor<3>) -> Tensor<3> {
         let [b, k, d] = tokens.dims();
         let stacked = from_tokens(tokens * mask.clone());
-        let h = relu(self.linear1.forward(stacked));
-        let h = relu(self.linear2.forward(h));
-        self.linear3.forward(h).reshape([b, k, d]) * mask
+        let h = relu(host_linear::forward(&self.linear1, stacked));
+        let h = relu(host_linear::forward(&self.linear2, h));
+        host_linear::forward(&self.linear3, h).reshape([b, k, d]) * mask
     }
 }
