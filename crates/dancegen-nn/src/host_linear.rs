@@ -25,10 +25,12 @@ const PARALLEL_MIN_FLOPS: usize = 1 << 18;
 /// Rows per task of [`repeat_rows`].
 const FILL_ROWS: usize = 256;
 
-/// `layer.forward(x)`, on the host when `x` is an inference `f32` tensor on the flex CPU
-/// backend ([`eligible`]), else Burn's op.
+/// `layer.forward(x)`, on the host when `x` and the layer's parameters are inference `f32`
+/// tensors on the flex CPU backend ([`eligible`]), else Burn's op.
 pub fn forward<const D: usize>(layer: &Linear, x: Tensor<D>) -> Tensor<D> {
-    if !eligible(&x) {
+    let weight = layer.weight.val();
+    let bias = layer.bias.as_ref().map(|b| b.val());
+    if !eligible(&x) || !eligible(&weight) || bias.as_ref().is_some_and(|b| !eligible(b)) {
         return layer.forward(x);
     }
     let device = x.device();
@@ -44,11 +46,11 @@ pub fn forward<const D: usize>(layer: &Linear, x: Tensor<D>) -> Tensor<D> {
     shape[D - 1] = d_out;
     let x = HostF32::new(&x);
     let x = x.as_slice();
-    let w = HostF32::new(&layer.weight.val());
+    let w = HostF32::new(&weight);
     let w = w.as_slice();
     // The bias rows are the GEMM's starting value (no zeroing pass, no bias pass after).
-    let (mut out, with_bias) = match &layer.bias {
-        Some(b) => (repeat_rows(HostF32::new(&b.val()).as_slice(), rows), true),
+    let (mut out, with_bias) = match &bias {
+        Some(b) => (repeat_rows(HostF32::new(b).as_slice(), rows), true),
         None => (repeat_rows(&vec![0.0; d_out], rows), false),
     };
     if rows > 0 && d_out > 0 {
