@@ -130,6 +130,9 @@ pub struct PddmLossWeights {
     /// Weight of the main decoder's own x̂0 loss next to the refined one (deep supervision: it
     /// keeps the main output usable when the refine block is switched off for the ablation).
     pub main_output: f64,
+    /// Weight of the root's up-axis term ([`crate::training::root_up_loss`]; not in the paper,
+    /// issue 16). 0 (the default, and every shipped model) leaves it out.
+    pub root_up: f64,
 }
 
 impl Default for PddmLossWeights {
@@ -142,6 +145,7 @@ impl Default for PddmLossWeights {
             genre: 0.01,
             discriminator: 0.1,
             main_output: 0.5,
+            root_up: 0.0,
         }
     }
 }

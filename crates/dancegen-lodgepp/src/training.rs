@@ -94,6 +94,39 @@ pub fn root_relative(x: Tensor<3>) -> Tensor<3> {
     Tensor::cat(parts, 2)
 }
 
+/// The root's up axis per frame, `[B, T, 3]`: row 0 × row 1 of the raw (denormalised) root 6D,
+/// i.e. the Z-up root matrix's row 2 when the rows are orthonormal.
+///
+/// Why it needs a term of its own: for an upright dancer facing heading θ, the stored rows are
+/// `(cos θ, 0, sin θ)` and `(sin θ, 0, −cos θ)` (`Edge151`: first two rows of `Q·R_y(θ)`, Q the
+/// +90°-about-X turn). Everything that does not depend on θ, the body's up `(0, 1, 0)`, lives in
+/// row 2, which is not stored. On a data set whose takes face every way the mean of all six
+/// root channels is near zero, which is what an x̂0 prediction tends to at high noise, and
+/// Gram–Schmidt of a near-zero pair can land on either orientation: the v2–v5 solo PDDMs
+/// committed to upside-down roots (docs/solo-data-v2.md).
+pub fn root_up(raw: Tensor<3>) -> Tensor<3> {
+    let a = |k: usize| raw.clone().narrow(2, layout::ROT6D_START + k, 1);
+    let (a0, a1, a2, b0, b1, b2) = (a(0), a(1), a(2), a(3), a(4), a(5));
+    Tensor::cat(
+        vec![
+            a1.clone() * b2.clone() - a2.clone() * b1.clone(),
+            a2 * b0.clone() - a0.clone() * b2,
+            a0 * b1 - a1 * b0,
+        ],
+        2,
+    )
+}
+
+/// Mean squared error between the predicted and the true root up axis ([`root_up`]) of raw
+/// frames `[B, T, 151]`. It is heading-free, so its target stays the same at every noise level.
+/// Unnormalised on purpose: the prediction's rows are pulled to unit length and a right-handed
+/// relation, with no division by a norm that can be near zero.
+pub fn root_up_loss(pred_raw: Tensor<3>, truth_raw: Tensor<3>) -> Tensor<1> {
+    (root_up(pred_raw) - root_up(truth_raw))
+        .powf_scalar(2.0)
+        .mean()
+}
+
 /// One PDDM training batch: windows `x` `[B, T, 151]` (normalised), `music` `[B, T, 35]`,
 /// genres; `seed` draws the timesteps, noise, primitive modes and condition dropout.
 /// `canonical_heading` turns every window into its own heading frame first (`crate::heading`).
@@ -195,8 +228,10 @@ pub fn pddm_loss(
     let skel = FkSkeleton::smpl24();
     let denorm = &model.denoiser.denorm;
     let pred_raw = denorm.apply(out.refined.clone());
+    let pred_raw_for_up = pred_raw.clone();
     let jp = joints(pred_raw.clone(), &skel);
-    let jg = joints(denorm.apply(d0.clone()), &skel);
+    let truth_raw = denorm.apply(d0.clone());
+    let jg = joints(truth_raw.clone(), &skel);
     let mse4 = |a: Tensor<4>, b: Tensor<4>| (a - b).powf_scalar(2.0).mean();
     let joint = mse4(jp.clone(), jg.clone());
     let vp = displacement(jp.clone());
@@ -227,6 +262,11 @@ pub fn pddm_loss(
         ("acceleration", acceleration),
         ("contact", contact),
     ];
+    if weights.root_up > 0.0 {
+        let up = root_up_loss(pred_raw_for_up, truth_raw);
+        total = total + up.clone() * weights.root_up;
+        parts.push(("root_up", up));
+    }
     if let Some(disc) = &model.discriminator {
         let real = disc.forward(d0, music.clone(), genre);
         let fake = disc.forward(out.refined.clone().detach(), music.clone(), genre);
@@ -238,4 +278,68 @@ pub fn pddm_loss(
         parts.push(("genre", g_loss));
     }
     PddmLosses { total, parts }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dancegen_motion::conventions::yup_to_zup_root_mat;
+    use dancegen_motion::rotation::Mat3;
+
+    /// Raw frames whose only non-zero channels are the root 6D of `rot` (a Y-up root rotation),
+    /// stored as `Edge151` does.
+    fn frames(rots: &[Mat3]) -> Tensor<3> {
+        let mut v = vec![0f32; rots.len() * DIMS];
+        for (f, r) in rots.iter().enumerate() {
+            let six = yup_to_zup_root_mat(r).to_6d();
+            for (k, x) in six.iter().enumerate() {
+                v[f * DIMS + layout::ROT6D_START + k] = *x as f32;
+            }
+        }
+        let device = dancegen_nn::device::inference();
+        Tensor::<3>::from_data(TensorData::new(v, [1, rots.len(), DIMS]), &device)
+    }
+
+    fn host(x: Tensor<3>) -> Vec<f32> {
+        x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
+    }
+
+    #[test]
+    fn root_up_is_the_same_for_every_heading_and_flips_with_the_body() {
+        let headings: Vec<f64> = (0..8).map(|i| -3.0 + 0.8 * i as f64).collect();
+        let upright: Vec<Mat3> = headings
+            .iter()
+            .map(|&h| Mat3::from_axis_angle([0.0, h, 0.0]))
+            .collect();
+        // The stored 6D averages out over the headings: nothing in it says "up" by itself.
+        let six = host(frames(&upright));
+        for k in 0..6 {
+            let mean: f32 = six
+                .chunks(DIMS)
+                .map(|f| f[layout::ROT6D_START + k])
+                .sum::<f32>()
+                / 8.0;
+            assert!(mean.abs() < 0.2, "channel {k} mean {mean}");
+        }
+        for up in host(root_up(frames(&upright))).chunks(3) {
+            assert!(
+                (up[0].abs() + (up[1] - 1.0).abs() + up[2].abs()) < 1e-5,
+                "{up:?}"
+            );
+        }
+        // Upside down (half a turn about the body's x axis after the heading): up is −Y.
+        let inverted: Vec<Mat3> = upright
+            .iter()
+            .map(|r| r.mul(&Mat3::from_axis_angle([std::f64::consts::PI, 0.0, 0.0])))
+            .collect();
+        for up in host(root_up(frames(&inverted))).chunks(3) {
+            assert!((up[1] + 1.0).abs() < 1e-5, "{up:?}");
+        }
+        // The loss: zero against itself, (0² + 2² + 0²) / 3 per frame against the flip.
+        let scalar = |x: Tensor<1>| x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()[0];
+        let same = scalar(root_up_loss(frames(&upright), frames(&upright)));
+        let flip = scalar(root_up_loss(frames(&inverted), frames(&upright)));
+        assert!(same.abs() < 1e-10, "{same}");
+        assert!((flip - 4.0 / 3.0).abs() < 1e-4, "{flip}");
+    }
 }

@@ -1,7 +1,8 @@
 //! Diagnostic (issue 16): does a PDDM checkpoint keep training windows upright, (a) as an x0
 //! prediction from the training forward at several noise levels and (b) when sampled from noise
 //! with a training window's own music and genre? Prints mean raw root height and the share of
-//! frames whose root "up" axis (row 0 × row 1 of the root matrix, its Y) points down.
+//! frames whose root "up" axis (row 0 × row 1 of the root matrix, its Y) points down, and the
+//! mean angle between that axis and world up.
 //!
 //!     cargo run --release -p dancegen-train --example pddm_upright_probe -- RUN_DIR CHECKPOINT.safetensors
 
@@ -21,7 +22,7 @@ use dancegen_train::tasks::lodgepp::PddmTask;
 
 fn report(label: &str, x: Tensor<3>, scale: &[f32], shift: &[f32]) {
     let v: Vec<f32> = x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
-    let (mut h, mut down, mut n) = (0f64, 0usize, 0usize);
+    let (mut h, mut down, mut n, mut tilt) = (0f64, 0usize, 0usize, 0f64);
     for f in v.chunks(151) {
         let r = |c: usize| f[c] * scale[c] + shift[c];
         h += r(6) as f64;
@@ -35,12 +36,18 @@ fn report(label: &str, x: Tensor<3>, scale: &[f32], shift: &[f32]) {
         if row2[1] < 0.0 {
             down += 1;
         }
+        // Angle between the body's up and world up (Gram–Schmidt's row 2 is the unit cross).
+        let norm = row2.iter().map(|v| (v * v) as f64).sum::<f64>().sqrt();
+        if norm > 0.0 {
+            tilt += (row2[1] as f64 / norm).clamp(-1.0, 1.0).acos().to_degrees();
+        }
         n += 1;
     }
     println!(
-        "{label}: mean height {:.3}, up-axis down {:.2}",
+        "{label}: mean height {:.3}, up-axis down {:.2}, mean tilt {:.1} deg",
         h / n as f64,
-        down as f64 / n as f64
+        down as f64 / n as f64,
+        tilt / n as f64
     );
 }
 
