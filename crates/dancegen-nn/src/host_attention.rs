@@ -380,6 +380,34 @@ mod tests {
         (a - b).abs().max().into_scalar::<f32>()
     }
 
+    /// Seeded normal `q`, `k`, `v` `[b, t, d]` and a causal `[t, t]` mask (true = blocked).
+    fn masked_case(
+        seed: u64,
+        b: usize,
+        t: usize,
+        d: usize,
+    ) -> (Tensor<3>, Tensor<3>, Tensor<3>, Tensor<2, Bool>) {
+        let dev = Device::flex();
+        dev.seed(seed);
+        let n = Distribution::Normal(0.0, 1.0);
+        let q = Tensor::<3>::random([b, t, d], n, &dev);
+        let k = Tensor::<3>::random([b, t, d], n, &dev);
+        let v = Tensor::<3>::random([b, t, d], n, &dev);
+        let causal: Vec<bool> = (0..t * t).map(|i| i % t > i / t).collect();
+        let causal = Tensor::<2, Bool>::from_data(TensorData::new(causal, [t, t]), &dev);
+        (q, k, v, causal)
+    }
+
+    /// The `[b, h, t, t]` mask Burn's reference takes: causal or padded key.
+    fn both_masks(causal: &Tensor<2, Bool>, pad: &Tensor<2, Bool>, h: usize) -> Tensor<4, Bool> {
+        let [b, t] = pad.dims();
+        causal
+            .clone()
+            .reshape([1, 1, t, t])
+            .expand([b, h, t, t])
+            .bool_or(pad.clone().reshape([b, 1, 1, t]).expand([b, h, t, t]))
+    }
+
     #[test]
     fn inference_tensors_take_the_host_path_and_tracked_ones_do_not() {
         let dev = Device::flex();
@@ -405,22 +433,12 @@ mod tests {
     fn query_blocks_cover_every_row_with_masks() {
         // Tq spans two whole query blocks and a partial one; the causal mask's row index must
         // follow each block's offset, and the padded batch element must be masked in all.
-        let dev = Device::flex();
-        dev.seed(5);
-        let n = Distribution::Normal(0.0, 1.0);
         let (b, t, d, h) = (2, 2 * QUERY_BLOCK + 7, 16, 2);
-        let q = Tensor::<3>::random([b, t, d], n, &dev);
-        let k = Tensor::<3>::random([b, t, d], n, &dev);
-        let v = Tensor::<3>::random([b, t, d], n, &dev);
-        let causal: Vec<bool> = (0..t * t).map(|i| i % t > i / t).collect();
-        let causal = Tensor::<2, Bool>::from_data(TensorData::new(causal, [t, t]), &dev);
+        let (q, k, v, causal) = masked_case(5, b, t, d);
+        let dev = Device::flex();
         let pad: Vec<bool> = (0..b * t).map(|i| i / t == 0 && i % t >= t - 20).collect();
         let pad = Tensor::<2, Bool>::from_data(TensorData::new(pad, [b, t]), &dev);
-        let full = causal
-            .clone()
-            .reshape([1, 1, t, t])
-            .expand([b, h, t, t])
-            .bool_or(pad.clone().reshape([b, 1, 1, t]).expand([b, h, t, t]));
+        let full = both_masks(&causal, &pad, h);
         let want = burn_reference(q.clone(), k.clone(), v.clone(), h, Some(full));
         let got = attention(q, &HostKv::new(k, v), h, Some(&causal), Some(&pad));
         assert!(max_abs_diff(got, want) < 1e-5);
@@ -428,15 +446,9 @@ mod tests {
 
     #[test]
     fn matches_burns_attention_with_causal_and_padding_masks() {
-        let dev = Device::flex();
-        dev.seed(4);
-        let n = Distribution::Normal(0.0, 1.0);
         let (b, t, d, h) = (2, 9, 12, 3);
-        let q = Tensor::<3>::random([b, t, d], n, &dev);
-        let k = Tensor::<3>::random([b, t, d], n, &dev);
-        let v = Tensor::<3>::random([b, t, d], n, &dev);
-        let causal: Vec<bool> = (0..t * t).map(|i| i % t > i / t).collect();
-        let causal = Tensor::<2, Bool>::from_data(TensorData::new(causal, [t, t]), &dev);
+        let (q, k, v, causal) = masked_case(4, b, t, d);
+        let dev = Device::flex();
         // Batch element 1 pads its last 3 keys; its first query row is then fully blocked.
         let pad: Vec<bool> = (0..b * t).map(|i| i / t == 1 && i % t >= t - 3).collect();
         let pad = Tensor::<2, Bool>::from_data(TensorData::new(pad, [b, t]), &dev);
@@ -446,11 +458,7 @@ mod tests {
             Tensor::<2, Bool>::from_data(TensorData::new(p, [b, t]), &dev)
         };
         for pad in [pad, pad_first] {
-            let full = causal
-                .clone()
-                .reshape([1, 1, t, t])
-                .expand([b, h, t, t])
-                .bool_or(pad.clone().reshape([b, 1, 1, t]).expand([b, h, t, t]));
+            let full = both_masks(&causal, &pad, h);
             let want = burn_reference(q.clone(), k.clone(), v.clone(), h, Some(full));
             let kv = HostKv::new(k.clone(), v.clone());
             let got = attention(q.clone(), &kv, h, Some(&causal), Some(&pad));
