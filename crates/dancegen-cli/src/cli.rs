@@ -577,7 +577,8 @@ pub struct DatasetBuildArgs {
     #[arg(long, value_name = "NAME")]
     pub genre: Option<String>,
     /// Also train on each training motion's left-right mirror image (clips `<name>_mirror`;
-    /// held-out motions are not mirrored). Pseudo pairing only.
+    /// held-out motions are not mirrored). Pseudo and duet pairing (a couple is mirrored as a
+    /// whole).
     #[arg(long)]
     pub mirror: bool,
     /// Pair each training motion with its N best songs (the further pairings are clips

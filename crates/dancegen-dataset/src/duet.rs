@@ -11,6 +11,11 @@
 //! named after a dancer has that dancer as follower (`motion/<clip>.npz`) and the partner as
 //! leader (`leader/<clip>.npz`). Both are grounded by one shared offset (the floor is shared).
 //! Holding out either dancer's stem holds out the whole couple.
+//!
+//! With `--mirror`, every training couple is also paired as its left–right mirror image (couple
+//! `<key>_mirror`, clips `<name>_mirror`): both partners go through the same world reflection
+//! ([`SmplMotion::mirror`] reflects x), so their placement relative to each other is mirrored
+//! with them and they stay a couple. Held-out couples are never mirrored.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -23,7 +28,7 @@ use crate::warp::warp_motion;
 use crate::{
     BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs, bas_bailando,
     best_song, check_hold_out, create_dirs, expand_motion_inputs, gather_clips, genre, load_units,
-    stem, world_joints, write_couple_clip,
+    mirrored_unit, stem, world_joints, write_couple_clip,
 };
 
 /// Two dancers recorded together.
@@ -117,7 +122,7 @@ pub(crate) fn build_duet(
             "--pairing duet needs --music SONGS".into(),
         ));
     }
-    let couples = couples(opts)?;
+    let mut couples = couples(opts)?;
     let mut known: BTreeSet<String> = opts.music.iter().map(|p| stem(p)).collect();
     for c in &couples {
         for d in &c.dancers {
@@ -127,6 +132,17 @@ pub(crate) fn build_duet(
     }
     check_hold_out(&opts.hold_out, &known)?;
     let held = |s: &str| opts.hold_out.iter().any(|h| h == s);
+    if opts.mirror {
+        let mirrored: Vec<Couple> = couples
+            .iter()
+            .filter(|c| !c.dancers.iter().any(|d| held(&d.stem) || held(&d.name)))
+            .map(|c| Couple {
+                key: format!("{}_mirror", c.key),
+                dancers: [mirrored_unit(&c.dancers[0]), mirrored_unit(&c.dancers[1])],
+            })
+            .collect();
+        couples.extend(mirrored);
+    }
     let songs = analyse_songs(&opts.music, progress)?;
     let train_songs: Vec<usize> = (0..songs.len())
         .filter(|&i| !held(&songs[i].name))

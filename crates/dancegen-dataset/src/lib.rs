@@ -109,7 +109,8 @@ pub struct BuildOptions {
     pub warp: WarpParams,
     /// Also trains on each training motion's left–right mirror image (clip `<name>_mirror`,
     /// [`SmplMotion::mirror`], as EDGE and Lodge augment); held-out motions are never mirrored.
-    /// Pseudo pairing only.
+    /// Pseudo and duet pairing (a couple is mirrored as a whole, both partners in one world
+    /// reflection, so it stays a couple).
     pub mirror: bool,
     /// Training takes are paired with this many songs, best first (1: only the best; the
     /// further pairings are clips `<name>__<song>`); held-out takes always with one. Pseudo
@@ -308,7 +309,7 @@ pub(crate) fn load_units(path: &Path, genre: &str) -> Result<Vec<MotionUnit>, Da
 
 /// The left–right mirror image of a unit, as its own clip (`<name>_mirror`); the stem stays,
 /// so a `--hold-out` of the take covers both.
-fn mirrored_unit(u: &MotionUnit) -> MotionUnit {
+pub(crate) fn mirrored_unit(u: &MotionUnit) -> MotionUnit {
     MotionUnit {
         name: format!("{}_mirror", u.name),
         motion: u.motion.mirror(),
@@ -457,9 +458,9 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
             "--songs-per-motion works with --pairing pseudo only".into(),
         ));
     }
-    if opts.mirror && opts.pairing != Pairing::Pseudo {
+    if opts.mirror && !matches!(opts.pairing, Pairing::Pseudo | Pairing::Duet) {
         return Err(DatasetError::Options(
-            "--mirror works with --pairing pseudo only (a couple or a data set layout is not \
+            "--mirror works with --pairing pseudo and duet only (a data set layout is not \
              mirrored)"
                 .into(),
         ));
