@@ -3,7 +3,7 @@
 mod common;
 
 use dancegen_motion::aistpp::load_motion;
-use dancegen_motion::repr::holistic::{FACE_DIMS, JOINTS, LAYOUT};
+use dancegen_motion::repr::holistic::{FACE_DIMS, JOINTS, LAYOUT, split};
 use dancegen_motion::repr::{Holistic623, Holistic723, HumanMl263, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use dancegen_motion::skeleton::{SMPLH52_MIRROR, SMPLH52_NAMES, SMPLH52_PARENTS, Skeleton};
@@ -184,6 +184,39 @@ fn holistic623_round_trip() {
         "vs HumanML263: root vel {root_err:.2e}, body rot {rot_err:.2e}, body vel {vel_err:.2e}"
     );
     assert!(root_err < 1e-5 && rot_err < 1e-5 && vel_err < 1e-5);
+}
+
+/// SoulNet's split body part is HumanML3D's 263 of the 22 body joints: equal to our
+/// [`HumanMl263`] of the body motion in every value but the floor-relative heights (root y and
+/// the ric y's, which differ by one constant: the 52-joint floor includes the fingers).
+#[test]
+fn split_body_part_is_the_body_humanml263() {
+    let (m, poses, trans) = synthetic();
+    let inter = Holistic623::encode(&poses, &trans, 30.0).unwrap();
+    let data = split::to_split(&inter, 0).unwrap();
+    let body = HumanMl263::encode(&m).unwrap();
+    let heights: Vec<usize> = std::iter::once(3)
+        .chain((0..21).map(|j| 4 + 3 * j + 1))
+        .collect();
+    let (mut err, mut shift) = (0.0f32, None::<f32>);
+    let mut shift_err = 0.0f32;
+    for (row, b) in data.chunks_exact(623).zip(body.chunks_exact(263)) {
+        let (part, hands, _) = split::parts(row);
+        assert_eq!(hands.len(), 360);
+        for k in 0..263 {
+            if heights.contains(&k) {
+                let d = part[k] - b[k];
+                let s = *shift.get_or_insert(d);
+                shift_err = shift_err.max((d - s).abs());
+            } else {
+                err = err.max((part[k] - b[k]).abs());
+            }
+        }
+    }
+    eprintln!("split body vs HumanML263: {err:.2e}; floor shift {shift:?} ± {shift_err:.2e}");
+    assert!(err < 1e-5, "{err}");
+    assert!(shift_err < 1e-5, "{shift_err}");
+    assert_eq!(split::from_split(&data, 0).unwrap(), inter);
 }
 
 #[test]

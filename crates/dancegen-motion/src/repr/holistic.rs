@@ -37,6 +37,8 @@
 //!   SMPL-H's). Use [`Holistic623::encode_with`] with [`Skeleton::smplh52`] and real rest
 //!   joints when you have them; decode with the same skeleton.
 
+pub mod split;
+
 use super::humanml263::{
     RicLayout, decode_ric_joints, decode_ric_rotations, dims_for_joints, encode_ric,
 };
