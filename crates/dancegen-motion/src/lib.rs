@@ -13,6 +13,7 @@ pub(crate) mod capsule_mesh;
 pub mod character;
 pub mod conventions;
 pub mod couple_separation;
+pub mod face;
 pub mod fbx;
 pub mod fk;
 pub mod foot_ik;

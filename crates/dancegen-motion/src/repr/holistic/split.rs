@@ -32,12 +32,12 @@ use crate::repr::humanml263::dims_for_joints;
 pub const BODY_JOINTS: usize = 22;
 /// Values per frame of the body part: HumanML3D's 263.
 pub const BODY_DIMS: usize = dims_for_joints(BODY_JOINTS);
+/// Finger joints (SMPL-H 22–51: left hand, then right hand).
+pub const FINGER_JOINTS: usize = JOINTS - BODY_JOINTS;
 /// Values per frame of the hands part: 30 finger joints × (ric 3 + 6D 6 + velocity 3).
-pub const HAND_DIMS: usize = (JOINTS - BODY_JOINTS) * 12;
+pub const HAND_DIMS: usize = FINGER_JOINTS * 12;
 /// Body + hands, the interleaved [`super::Holistic623::DIMS`].
 pub const BODY_HAND_DIMS: usize = BODY_DIMS + HAND_DIMS;
-
-const FINGERS: usize = JOINTS - BODY_JOINTS;
 
 /// Interleaved ranges that make up the body part, in split order.
 pub const BODY_SOURCE: [Range<usize>; 4] = [
@@ -108,7 +108,7 @@ mod tests {
 
     #[test]
     fn the_permutation_is_souldances_slices_and_a_bijection() {
-        assert_eq!((BODY_DIMS, HAND_DIMS, FINGERS), (263, 360, 30));
+        assert_eq!((BODY_DIMS, HAND_DIMS, FINGER_JOINTS), (263, 360, 30));
         // holistic.md §1.1, written out.
         assert_eq!(BODY_SOURCE, [0..67, 157..283, 463..529, 619..623]);
         assert_eq!(HAND_SOURCE, [67..157, 283..463, 529..619]);
