@@ -33,6 +33,7 @@ pub mod duet;
 pub mod error;
 pub mod genre;
 pub mod group;
+pub mod holistic_synth;
 pub mod layouts;
 pub mod manifest;
 /// The beat warp lives in the motion crate (the generation library aligns generated dances with

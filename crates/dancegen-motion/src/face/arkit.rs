@@ -99,7 +99,7 @@ impl FaceWeights {
     /// Checks the shape (a multiple of 52), the frame rate and the range (finite, in [0, 1]; the
     /// first bad value is named by frame and blendshape).
     pub fn new(weights: Vec<f32>, fps: f32) -> Result<Self, FaceError> {
-        if weights.len() % ARKIT_COUNT != 0 {
+        if !weights.len().is_multiple_of(ARKIT_COUNT) {
             return Err(FaceError::Shape(format!(
                 "{} values is not a whole number of {ARKIT_COUNT}-weight frames",
                 weights.len()
