@@ -581,6 +581,10 @@ pub struct DatasetBuildArgs {
     /// whole).
     #[arg(long)]
     pub mirror: bool,
+    /// Also give every clip SYNTHETIC fingers and an ARKit face made from its real body and its
+    /// music (`holistic/<clip>.npz`), for the holistic system. Pseudo and aistpp pairing.
+    #[arg(long)]
+    pub holistic: bool,
     /// Pair each training motion with its N best songs (the further pairings are clips
     /// `<name>__<song>`; held-out motions get one). Pseudo pairing only.
     #[arg(long, value_name = "N", default_value_t = 1)]

@@ -50,6 +50,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
         seed: args.seed,
         warp: WarpParams::default(),
         mirror: args.mirror,
+        holistic: args.holistic,
         songs_per_motion: args.songs_per_motion,
         merge_genres: args.merge_genre.clone(),
         group: dancegen_dataset::group::GroupOptions {

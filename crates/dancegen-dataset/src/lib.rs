@@ -113,6 +113,10 @@ pub struct BuildOptions {
     /// Pseudo and duet pairing (a couple is mirrored as a whole, both partners in one world
     /// reflection, so it stays a couple).
     pub mirror: bool,
+    /// Also give every clip **synthetic** fingers and an ARKit face made from its body and
+    /// music ([`holistic_synth::attach`]), for the holistic (SoulNet) system. Pseudo and AIST++
+    /// pairing (bodies without real hands).
+    pub holistic: bool,
     /// Training takes are paired with this many songs, best first (1: only the best; the
     /// further pairings are clips `<name>__<song>`); held-out takes always with one. Pseudo
     /// pairing only.
@@ -139,6 +143,7 @@ impl BuildOptions {
             seed: 0,
             warp: WarpParams::default(),
             mirror: false,
+            holistic: false,
             songs_per_motion: 1,
             merge_genres: Vec::new(),
             group: group::GroupOptions::default(),
@@ -366,6 +371,7 @@ pub(crate) fn write_clip(out: &Path, c: &ClipData) -> Result<ClipEntry, DatasetE
         warp: c.warp.clone(),
         leader: None,
         group: None,
+        holistic: None,
     })
 }
 
@@ -423,6 +429,7 @@ pub(crate) fn write_couple_clip(
         warp: Some(warp),
         leader: Some(leader_rel),
         group: None,
+        holistic: None,
     })
 }
 
@@ -466,6 +473,12 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
                 .into(),
         ));
     }
+    if opts.holistic && !matches!(opts.pairing, Pairing::Pseudo | Pairing::Aistpp) {
+        return Err(DatasetError::Options(
+            "--holistic works with --pairing pseudo and aistpp only (bodies without real hands)"
+                .into(),
+        ));
+    }
     let merges = merge_table(&opts.merge_genres)?;
     let mut clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
@@ -478,6 +491,10 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
         if let Some(to) = merges.get(&c.genre) {
             c.genre = to.clone();
         }
+    }
+    if opts.holistic {
+        progress.stage("synthesising hands and faces", 0);
+        holistic_synth::attach::attach(&opts.out, &mut clips, opts.seed)?;
     }
     finish(&opts.out, clips)
 }

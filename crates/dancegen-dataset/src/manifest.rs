@@ -57,6 +57,10 @@ pub struct ClipEntry {
     /// `dancer_<k>.npz` files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub group: Option<GroupLabels>,
+    /// Holistic data sets (`--holistic`): the clip's **synthetic** fingers and face
+    /// (`crate::holistic_synth::attach`), relative to the manifest's directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub holistic: Option<String>,
 }
 
 /// What a composed group sample is made of (`--pairing group`, [`crate::group`]).

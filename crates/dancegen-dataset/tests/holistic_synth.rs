@@ -241,3 +241,62 @@ fn face_blinks_breathes_and_follows_the_mood() {
     eprintln!("smile major {smile_major:.3}, minor {smile_minor:.3}; frown minor {frown_minor:.3}");
     assert!(smile_major > 0.3 && smile_minor < 0.05 && frown_minor > 0.1);
 }
+
+/// `holistic` gives every clip, held-out ones too, a `holistic/<clip>.npz` with moving
+/// synthetic hands and a face, listed in the manifest; a rebuild is identical.
+#[test]
+fn dataset_build_attaches_hands_and_faces() {
+    use dancegen_dataset::{BuildOptions, build};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("set");
+    let mut opts = BuildOptions::pseudo(
+        &out,
+        vec![
+            common::salsa("60_01_scaled.bvh"),
+            common::salsa("61_01_scaled.bvh"),
+        ],
+        vec![common::song("metal_madness.ogg")],
+    );
+    opts.hold_out = vec!["61_01_scaled".into()];
+    opts.holistic = true;
+    let m = build(&opts, &()).expect("build").manifest;
+    assert_eq!(m.clips.len(), 2);
+    let mut first = Vec::new();
+    for c in &m.clips {
+        let rel = c.holistic.as_deref().expect("a holistic file");
+        assert_eq!(
+            rel.starts_with("held_out/"),
+            c.motion.starts_with("held_out/"),
+            "{rel}"
+        );
+        let members = dancegen_io::read_npz(&out.join(rel)).unwrap();
+        let get = |n: &str| {
+            members
+                .iter()
+                .find(|(k, _)| k == n)
+                .map(|(_, a)| a)
+                .unwrap()
+        };
+        assert_eq!(get("hands").shape, [c.frames, 30, 3]);
+        assert_eq!(get("face").shape, [c.frames, 52]);
+        assert_eq!(get("hand_targets").shape, [c.frames, 2]);
+        assert!(get("face").data.iter().all(|v| (0.0..=1.0).contains(v)));
+        let hands = &get("hands").data;
+        let spread = hands.iter().cloned().fold(f64::MIN, f64::max)
+            - hands.iter().cloned().fold(f64::MAX, f64::min);
+        assert!(spread > 0.5, "{}: hands barely move ({spread} rad)", c.name);
+        first.push(std::fs::read(out.join(rel)).unwrap());
+    }
+    // Rebuilt: the same bytes.
+    build(&opts, &()).unwrap();
+    for (c, bytes) in m.clips.iter().zip(&first) {
+        assert_eq!(
+            &std::fs::read(out.join(c.holistic.as_deref().unwrap())).unwrap(),
+            bytes
+        );
+    }
+    // Not for couples.
+    opts.pairing = dancegen_dataset::Pairing::Duet;
+    let e = build(&opts, &()).unwrap_err().to_string();
+    assert!(e.contains("--holistic"), "{e}");
+}

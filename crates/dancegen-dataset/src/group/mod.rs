@@ -827,5 +827,6 @@ fn write_scene(
             trajectories: traj_rel,
             sources: scene.sources.clone(),
         }),
+        holistic: None,
     })
 }

@@ -6,6 +6,7 @@
 //! stated rules of [`hands`] and [`face`] from the body and the music. Every model trained on it
 //! says so. The point is that hands and face depend on the body and the music in a learnable
 //! way, so the body → hands → face hierarchy has something to learn.
+pub mod attach;
 pub mod face;
 pub mod hand_poses;
 pub mod hands;
