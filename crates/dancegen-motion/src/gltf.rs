@@ -92,6 +92,9 @@ pub enum GlbInputError {
     /// Over GLB's 32-bit sizes.
     #[error("{0}")]
     TooLarge(String),
+    /// A face track that does not fit the motion.
+    #[error("face: {0}")]
+    Face(String),
 }
 
 /// A `.glb` that could not be written; both variants name the path.
@@ -149,6 +152,50 @@ pub fn glb_bytes(
     )
 }
 
+/// A face for a single dancer's `.glb`: ARKit weights played on a head mesh
+/// ([`crate::face::head_mesh`]) that rides on the skeleton's `head_joint`.
+///
+/// The head is its own node (`face`), a child of the head joint's node, with a mesh whose 52
+/// morph targets are the ARKit blendshapes, named in `mesh.extras.targetNames` (the convention
+/// three.js and Blender read), and one more animation channel, `path: "weights"`, with 52 values
+/// per key. Blender imports the targets as shape keys named after ARKit.
+#[derive(Debug, Clone, Copy)]
+pub struct FaceAnimation<'a> {
+    pub weights: &'a crate::face::FaceWeights,
+    pub head_joint: usize,
+}
+
+/// [`write_glb`] with a face (see [`FaceAnimation`]).
+pub fn write_glb_with_face(
+    path: impl AsRef<Path>,
+    skeleton: &Skeleton,
+    dancer: DancerAnimation<'_>,
+    face: FaceAnimation<'_>,
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<(), GltfError> {
+    let path = path.as_ref();
+    let bytes = glb_document(skeleton, &[dancer], Some(face), fps, opts).map_err(|reason| {
+        GltfError::Input {
+            path: path.to_path_buf(),
+            reason,
+        }
+    })?;
+    dancegen_io::write_atomic(path, |w| w.write_all(&bytes))?;
+    Ok(())
+}
+
+/// The `.glb` file contents for [`write_glb_with_face`].
+pub fn glb_bytes_with_face(
+    skeleton: &Skeleton,
+    dancer: DancerAnimation<'_>,
+    face: FaceAnimation<'_>,
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, GlbInputError> {
+    glb_document(skeleton, &[dancer], Some(face), fps, opts)
+}
+
 /// One dancer's motion, laid out as the arguments of [`write_glb`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DancerAnimation<'a> {
@@ -193,6 +240,16 @@ pub fn write_glb_multi(
 pub fn glb_bytes_multi(
     skeleton: &Skeleton,
     dancers: &[DancerAnimation<'_>],
+    fps: f32,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, GlbInputError> {
+    glb_document(skeleton, dancers, None, fps, opts)
+}
+
+fn glb_document(
+    skeleton: &Skeleton,
+    dancers: &[DancerAnimation<'_>],
+    face: Option<FaceAnimation<'_>>,
     fps: f32,
     opts: &GlbOptions,
 ) -> Result<Vec<u8>, GlbInputError> {
@@ -418,6 +475,24 @@ pub fn glb_bytes_multi(
             "baseColorFactor": c.map(f64::from), "metallicFactor": 0.0, "roughnessFactor": 0.8}}));
     }
 
+    if let Some(face) = face {
+        add_face(
+            face,
+            frames,
+            time_acc,
+            FaceParts {
+                bin: &mut bin,
+                views: &mut views,
+                accessors: &mut accessors,
+                nodes: &mut nodes,
+                meshes: &mut meshes,
+                materials: &mut materials,
+                samplers: &mut samplers,
+                channels: &mut channels,
+            },
+        )?;
+    }
+
     let doc = json!({
         "asset": {"version": "2.0", "generator": "dancegen"},
         "scene": 0,
@@ -436,6 +511,114 @@ pub fn glb_bytes_multi(
         bin.data,
     )
     .map_err(GlbInputError::TooLarge)
+}
+
+/// The document parts a face adds to.
+struct FaceParts<'a> {
+    bin: &'a mut BinBuilder,
+    views: &'a mut Vec<Value>,
+    accessors: &'a mut Vec<Value>,
+    nodes: &'a mut Vec<Value>,
+    meshes: &'a mut Vec<Value>,
+    materials: &'a mut Vec<Value>,
+    samplers: &'a mut Vec<Value>,
+    channels: &'a mut Vec<Value>,
+}
+
+/// Adds the head mesh with its 52 morph targets as a child of the head joint's node, and its
+/// `weights` channel (single dancer: node `j` is joint `j`).
+fn add_face(
+    face: FaceAnimation<'_>,
+    frames: usize,
+    time_acc: usize,
+    p: FaceParts<'_>,
+) -> Result<(), GlbInputError> {
+    use crate::face::{ARKIT_COUNT, ARKIT_NAMES, head_mesh::build_head_mesh};
+    if face.weights.frames() != frames {
+        return Err(GlbInputError::Face(format!(
+            "{} frames of weights for {frames} frames of motion",
+            face.weights.frames()
+        )));
+    }
+    let head = face.head_joint;
+    if head >= p.nodes.len() || p.nodes[head].get("mesh").is_some() {
+        return Err(GlbInputError::Face(format!(
+            "head joint {head} is not a joint"
+        )));
+    }
+    let mesh = build_head_mesh();
+    let count = mesh.positions.len() / 3;
+    let (lo, hi) = min_max3(&mesh.positions);
+    let pv = p
+        .bin
+        .view(p.views, &f32_bytes(&mesh.positions), Some(ARRAY_BUFFER));
+    p.accessors.push(
+        json!({"bufferView": pv, "componentType": FLOAT, "count": count,
+        "type": "VEC3", "min": lo, "max": hi}),
+    );
+    let pos_acc = p.accessors.len() - 1;
+    let nv = p
+        .bin
+        .view(p.views, &f32_bytes(&mesh.normals), Some(ARRAY_BUFFER));
+    p.accessors.push(
+        json!({"bufferView": nv, "componentType": FLOAT, "count": count,
+        "type": "VEC3"}),
+    );
+    let nrm_acc = p.accessors.len() - 1;
+    let idx: Vec<u8> = mesh
+        .indices
+        .iter()
+        .flat_map(|&i| (i as u16).to_le_bytes())
+        .collect();
+    let iv = p.bin.view(p.views, &idx, Some(ELEMENT_ARRAY_BUFFER));
+    p.accessors
+        .push(json!({"bufferView": iv, "componentType": UNSIGNED_SHORT,
+        "count": mesh.indices.len(), "type": "SCALAR"}));
+    let index_acc = p.accessors.len() - 1;
+    // Morph targets: one view and accessor per blendshape (vertex attributes sharing a view
+    // would need a byteStride; POSITION targets need min and max).
+    let mut targets = Vec::with_capacity(ARKIT_COUNT);
+    for t in &mesh.targets {
+        let (lo, hi) = min_max3(t);
+        let tv = p.bin.view(p.views, &f32_bytes(t), Some(ARRAY_BUFFER));
+        p.accessors.push(
+            json!({"bufferView": tv, "componentType": FLOAT, "count": count,
+            "type": "VEC3", "min": lo, "max": hi}),
+        );
+        targets.push(json!({"POSITION": p.accessors.len() - 1}));
+    }
+    p.materials
+        .push(json!({"name": "face", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.85, 0.7, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.7}}));
+    p.meshes.push(json!({"name": "face", "primitives": [{
+        "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc}, "indices": index_acc,
+        "material": p.materials.len() - 1, "mode": 4, "targets": targets}],
+        "weights": vec![0.0; ARKIT_COUNT],
+        "extras": {"targetNames": ARKIT_NAMES.to_vec()}}));
+    p.nodes
+        .push(json!({"name": "face", "mesh": p.meshes.len() - 1}));
+    let face_node = p.nodes.len() - 1;
+    let children = p.nodes[head]
+        .as_object_mut()
+        .expect("a node object")
+        .entry("children")
+        .or_insert_with(|| json!([]));
+    children
+        .as_array_mut()
+        .expect("children array")
+        .push(json!(face_node));
+    let wv = p
+        .bin
+        .view(p.views, &f32_bytes(face.weights.as_slice()), None);
+    p.accessors
+        .push(json!({"bufferView": wv, "componentType": FLOAT,
+        "count": frames * ARKIT_COUNT, "type": "SCALAR"}));
+    p.samplers
+        .push(json!({"input": time_acc, "output": p.accessors.len() - 1,
+        "interpolation": "LINEAR"}));
+    p.channels.push(json!({"sampler": p.samplers.len() - 1,
+        "target": {"node": face_node, "path": "weights"}}));
+    Ok(())
 }
 
 const FLOAT: u32 = 5126;
