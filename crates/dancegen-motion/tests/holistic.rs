@@ -4,7 +4,7 @@ mod common;
 
 use dancegen_motion::aistpp::load_motion;
 use dancegen_motion::repr::holistic::{FACE_DIMS, JOINTS, LAYOUT, split};
-use dancegen_motion::repr::{Holistic623, Holistic723, HumanMl263, SmplMotion};
+use dancegen_motion::repr::{FineDance315, Holistic623, Holistic723, HumanMl263, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use dancegen_motion::skeleton::{SMPLH52_MIRROR, SMPLH52_NAMES, SMPLH52_PARENTS, Skeleton};
 
@@ -250,4 +250,55 @@ fn holistic723_face_pass_through() {
     assert!(Holistic623::encode(&poses, &trans[3..], 30.0).is_err());
     assert!(Holistic623::decode(&enc, 30.0).is_err());
     assert!(Holistic623::encode_with(&Skeleton::smpl24(), &poses, &trans, 30.0).is_err());
+}
+
+/// FineDance's 315 layout carries SMPL-H 52 with real fingers: a 52-joint motion written as a
+/// FineDance `.npy` reads back with the same rotations, fingers included, and the same FK.
+#[test]
+fn finedance_315_reads_as_smplh52_with_fingers() {
+    use dancegen_motion::repr::FineDanceMotion;
+    let (_, poses, trans) = synthetic();
+    let t = trans.len() / 3;
+    let data = FineDance315::encode_smplh52(&poses, &trans).unwrap();
+    assert_eq!(data.len(), t * 315);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("001.npy");
+    dancegen_io::write_npy_f32(&path, &[t, 315], &data).unwrap();
+    let fd = FineDanceMotion::from_npy(&path).unwrap();
+    let m = fd.to_smplh52().unwrap();
+    assert_eq!((m.frames(), m.poses.len()), (t, t * 52 * 3));
+    assert_eq!(m.trans, trans);
+    let mut rerr = 0.0f64;
+    for (a, b) in m.poses.chunks_exact(3).zip(poses.chunks_exact(3)) {
+        let (ra, rb) = (
+            Mat3::from_axis_angle([a[0], a[1], a[2]].map(f64::from)),
+            Mat3::from_axis_angle([b[0], b[1], b[2]].map(f64::from)),
+        );
+        for i in 0..3 {
+            for k in 0..3 {
+                rerr = rerr.max((ra.0[i][k] - rb.0[i][k]).abs());
+            }
+        }
+    }
+    let skel = Skeleton::smplh52_approx();
+    let ferr = max_abs_diff(
+        &m.joints_world_with(&skel).unwrap(),
+        &dancegen_motion::repr::holistic::HolisticMotion {
+            fps: 30.0,
+            poses: poses.clone(),
+            trans: trans.clone(),
+            face: None,
+        }
+        .joints_world_with(&skel)
+        .unwrap(),
+    );
+    eprintln!("FineDance 315 <-> SMPL-H 52: rotation {rerr:.1e}, FK {ferr:.1e} m");
+    assert!(rerr < 1e-5 && ferr < 1e-5, "{rerr} {ferr}");
+    // The fingers are really there (they curl), and the body agrees with the SMPL 24 reader.
+    assert!(m.poses[22 * 3..52 * 3].iter().any(|v| v.abs() > 0.1));
+    let body = fd.to_smpl24().unwrap();
+    assert_eq!(&body.poses[..22 * 3], &m.poses[..22 * 3]);
+    // Shape errors name the problem.
+    assert!(FineDance315::encode_smplh52(&poses[..100], &trans).is_err());
+    assert!(FineDance315::encode_smplh52(&poses, &trans[3..]).is_err());
 }

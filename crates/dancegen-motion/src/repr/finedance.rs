@@ -22,6 +22,7 @@
 use super::lodge139::{BODY_JOINTS, IDENTITY_6D, Lodge139, decode_rows, push_6d};
 use super::{ReprError, SmplMotion, check_fps, frames_of};
 use crate::conventions::CANONICAL_FPS;
+use crate::rotation::Mat3;
 use std::path::Path;
 
 /// Number of finger joints in FineDance (15 per hand).
@@ -65,6 +66,32 @@ impl FineDanceMotion {
         Ok(m)
     }
 
+    /// SMPL-H 52 motion with its real fingers: FineDance's joint order is SMPL-H's (body 0–21,
+    /// left hand 22–36, right hand 37–51, each index, middle, pinky, ring, thumb), so every 6D
+    /// rotation maps to the same-numbered SMPL-H joint.
+    pub fn to_smplh52(&self) -> Result<super::holistic::HolisticMotion, ReprError> {
+        let t = frames_of(
+            "FineDanceMotion::to_smplh52",
+            &self.data,
+            FineDance315::DIMS,
+        )?;
+        let mut poses = Vec::with_capacity(t * super::holistic::JOINTS * 3);
+        let mut trans = Vec::with_capacity(t * 3);
+        for row in self.data.chunks_exact(FineDance315::DIMS) {
+            trans.extend_from_slice(&row[..3]);
+            for d in row[3..].chunks_exact(6) {
+                let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
+                poses.extend(Mat3::from_6d(&d).to_axis_angle().map(|v| v as f32));
+            }
+        }
+        Ok(super::holistic::HolisticMotion {
+            fps: self.fps,
+            poses,
+            trans,
+            face: None,
+        })
+    }
+
     /// Finger 6D rotations `(T, 30, 6)` (left 15 then right 15).
     pub fn hands_6d(&self) -> Vec<f32> {
         self.data
@@ -92,6 +119,29 @@ impl FineDance315 {
             push_6d(&mut out, m, f, BODY_JOINTS);
             for _ in 0..HAND_JOINTS {
                 out.extend_from_slice(&IDENTITY_6D);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Encodes an SMPL-H 52 motion (`poses` `(T, 52, 3)` axis-angle, `trans` `(T, 3)`) to
+    /// `(T, 315)` with its fingers (the inverse of [`FineDanceMotion::to_smplh52`]).
+    pub fn encode_smplh52(poses: &[f32], trans: &[f32]) -> Result<Vec<f32>, ReprError> {
+        let joints = super::holistic::JOINTS;
+        let t = frames_of("FineDance315::encode_smplh52 poses", poses, joints * 3)?;
+        if frames_of("FineDance315::encode_smplh52 trans", trans, 3)? != t {
+            return Err(ReprError::FrameMismatch {
+                what: "FineDance315::encode_smplh52",
+                poses: t,
+                trans: trans.len() / 3,
+            });
+        }
+        let mut out = Vec::with_capacity(t * Self::DIMS);
+        for f in 0..t {
+            out.extend_from_slice(&trans[f * 3..f * 3 + 3]);
+            for a in poses[f * joints * 3..(f + 1) * joints * 3].chunks_exact(3) {
+                let r = Mat3::from_axis_angle([a[0] as f64, a[1] as f64, a[2] as f64]);
+                out.extend(r.to_6d().map(|v| v as f32));
             }
         }
         Ok(out)
