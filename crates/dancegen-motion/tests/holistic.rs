@@ -302,3 +302,30 @@ fn finedance_315_reads_as_smplh52_with_fingers() {
     assert!(FineDance315::encode_smplh52(&poses[..100], &trans).is_err());
     assert!(FineDance315::encode_smplh52(&poses, &trans[3..]).is_err());
 }
+
+/// A SoulDance-style `(T, 723)` split-layout `.npy` reads back as the motion it encodes, face
+/// included; other widths are refused with the file's name.
+#[test]
+fn souldance_split_npy_reads_as_holistic_motion() {
+    let (_, poses, trans) = synthetic();
+    let t = trans.len() / 3;
+    let face: Vec<f32> = (0..t * FACE_DIMS).map(|i| (i as f32 * 0.1).sin()).collect();
+    let inter = Holistic723::encode(&poses, &trans, Some(&face), 30.0).unwrap();
+    let data = split::to_split(&inter, FACE_DIMS).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("souldance.npy");
+    dancegen_io::write_npy_f32(&path, &[t - 1, 723], &data).unwrap();
+    let m = split::read_split_npy(&path, 30.0).unwrap();
+    let want = Holistic723::decode(&inter, 30.0).unwrap();
+    assert_eq!(m, want);
+    assert_eq!(m.face.as_deref(), Some(&face[..(t - 1) * FACE_DIMS]));
+    // Body + hands only.
+    let (b, _) = Holistic723::split(&inter).unwrap();
+    let p623 = dir.path().join("motionx.npy");
+    dancegen_io::write_npy_f32(&p623, &[t - 1, 623], &split::to_split(&b, 0).unwrap()).unwrap();
+    assert_eq!(split::read_split_npy(&p623, 30.0).unwrap().face, None);
+    let bad = dir.path().join("bad.npy");
+    dancegen_io::write_npy_f32(&bad, &[2, 263], &[0.0; 526]).unwrap();
+    let e = split::read_split_npy(&bad, 30.0).unwrap_err().to_string();
+    assert!(e.contains("bad.npy") && e.contains("[2, 263]"), "{e}");
+}

@@ -95,6 +95,35 @@ pub fn from_split(data: &[f32], face_dims: usize) -> Result<Vec<f32>, ReprError>
     Ok(out)
 }
 
+/// Reads a SoulDance / Motion-X-style holistic `.npy` in the split layout, `(T, 623)` (no
+/// face) or `(T, 723)` (100 FLAME values), and decodes it on our approximate SMPL-H skeleton
+/// ([`super::Holistic623::decode`]; the face passes through). For users who have such data: the
+/// file names itself in every error.
+pub fn read_split_npy(
+    path: &std::path::Path,
+    fps: f32,
+) -> Result<super::HolisticMotion, ReprError> {
+    let a = dancegen_io::read_npy(path)?;
+    let bad = |why: String| ReprError::Invalid(format!("{}: {why}", path.display()));
+    let face = match a.shape.as_slice() {
+        [_, w] if *w == BODY_HAND_DIMS => 0,
+        [_, w] if *w == BODY_HAND_DIMS + super::FACE_DIMS => super::FACE_DIMS,
+        s => {
+            return Err(bad(format!(
+                "shape {s:?}: a holistic motion is (T, 623) or (T, 723) in SoulNet's split layout"
+            )));
+        }
+    };
+    let data: Vec<f32> = a.data.iter().map(|&v| v as f32).collect();
+    let inter = from_split(&data, face)?;
+    let m = if face == 0 {
+        super::Holistic623::decode(&inter, fps)
+    } else {
+        super::Holistic723::decode(&inter, fps)
+    };
+    m.map_err(|e| bad(e.to_string()))
+}
+
 /// One split row's parts: `(body 263, hands 360, face F)`.
 pub fn parts(row: &[f32]) -> (&[f32], &[f32], &[f32]) {
     let (body, rest) = row.split_at(BODY_DIMS);
