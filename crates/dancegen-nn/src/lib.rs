@@ -30,6 +30,7 @@ pub mod loss;
 pub mod mask;
 pub mod masked;
 pub mod mlp;
+pub mod part_autoencoder;
 pub mod pos_encoding;
 pub mod progress;
 pub mod quant;
