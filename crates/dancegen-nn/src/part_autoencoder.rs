@@ -53,7 +53,8 @@ impl PartQuantizerConfig {
     }
 }
 
-/// The part quantizer.
+/// The part quantizer. One per model, so the size gap between the variants costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Module, Debug)]
 pub enum PartQuantizer {
     Hrvq(HierarchicalRvq),
