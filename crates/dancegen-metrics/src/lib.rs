@@ -82,6 +82,7 @@ pub mod group;
 pub mod kinetic;
 pub mod longform;
 pub mod manual;
+pub mod mmr;
 pub mod mpjpe;
 pub mod penetration;
 pub mod pfc;
