@@ -9,7 +9,7 @@
 //!   own predicted contact exceeds 0.95.
 //! - [`commitment`]: VQ commitment `‖z_e − sg(z_q)‖²`.
 //! - [`info_nce`]: symmetric InfoNCE over a batch of paired embeddings (SoulNet's music–motion
-//!   retrieval).
+//!   retrieval); [`info_nce_filtered`] leaves near-duplicate negatives out (TMR's filtering).
 //! - [`hinge_discriminator`] / [`hinge_generator`]: hinge GAN (Lodge's genre discriminator).
 
 use burn::tensor::activation::{log_softmax, relu};
@@ -201,6 +201,42 @@ pub fn info_nce(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<1> {
     (ce(logits.clone()) + ce(logits.transpose())) / 2.0
 }
 
+/// [`info_nce`] with TMR's negative filtering (`InfoNCE_with_filtering`, which SoulNet's MMR
+/// describes with threshold 0.8 but never enables — `holistic.md` §1.4): a negative `j` of
+/// query `i` is left out of both softmaxes when `pair_similarity[i, j] > threshold` (`i ≠ j`),
+/// so near-duplicate conditions (two cuts of the same song, say) are not pushed apart.
+/// `pair_similarity` `[N, N]` is the similarity of the pairs' conditioning (e.g. cosine of the
+/// music features); the diagonal is never filtered.
+pub fn info_nce_filtered(
+    a: Tensor<2>,
+    b: Tensor<2>,
+    temperature: f64,
+    pair_similarity: Tensor<2>,
+    threshold: f64,
+) -> Tensor<1> {
+    let n = a.dims()[0];
+    let norm = |v: Tensor<2>| {
+        let l = v
+            .clone()
+            .powf_scalar(2.0)
+            .sum_dim(1)
+            .sqrt()
+            .clamp_min(1e-12);
+        v / l
+    };
+    let logits = norm(a).matmul(norm(b).transpose()) / temperature;
+    let device: Device = logits.device();
+    let eye = Tensor::<2>::eye(n, &device).bool();
+    let drop = pair_similarity
+        .greater_elem(threshold)
+        .bool_and(eye.bool_not());
+    // A large negative rather than −∞: exp underflows to 0 without NaN gradients.
+    let logits = logits.mask_fill(drop, -1e9);
+    let diag = Tensor::<1, Int>::arange(0..n as i64, &device).reshape([n, 1]);
+    let ce = |l: Tensor<2>| -> Tensor<1> { log_softmax(l, 1).gather(1, diag.clone()).mean().neg() };
+    (ce(logits.clone()) + ce(logits.transpose())) / 2.0
+}
+
 /// Hinge loss of the discriminator: `mean(relu(1 − D(real))) + mean(relu(1 + D(fake)))`.
 pub fn hinge_discriminator(real: Tensor<2>, fake: Tensor<2>) -> Tensor<1> {
     relu(real.neg() + 1.0).mean() + relu(fake + 1.0).mean()
@@ -209,4 +245,61 @@ pub fn hinge_discriminator(real: Tensor<2>, fake: Tensor<2>) -> Tensor<1> {
 /// Hinge loss of the generator: `−mean(D(fake))`.
 pub fn hinge_generator(fake: Tensor<2>) -> Tensor<1> {
     fake.mean().neg()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device;
+
+    fn t2(v: &[f32], n: usize, d: usize) -> Tensor<2> {
+        Tensor::from_data(TensorData::new(v.to_vec(), [n, d]), &device::inference())
+    }
+    fn val(t: Tensor<1>) -> f32 {
+        t.into_scalar::<f32>()
+    }
+
+    #[test]
+    fn filtering_drops_only_similar_negatives() {
+        // Three pairs; pairs 0 and 1 share a near-identical condition.
+        let a = t2(&[1.0, 0.0, 0.8, 0.6, 0.0, 1.0], 3, 2);
+        let b = t2(&[0.9, 0.1, 0.7, 0.7, 0.1, 0.9], 3, 2);
+        let sim = t2(&[1.0, 0.95, 0.1, 0.95, 1.0, 0.2, 0.1, 0.2, 1.0], 3, 3);
+        let plain = val(info_nce(a.clone(), b.clone(), 0.1));
+        // Nothing above the threshold: the plain loss.
+        let none = val(info_nce_filtered(
+            a.clone(),
+            b.clone(),
+            0.1,
+            sim.clone(),
+            0.99,
+        ));
+        assert!((plain - none).abs() < 1e-6, "{plain} {none}");
+        // Pairs 0 and 1 no longer compete: lower loss, and by hand equal to dropping the two
+        // cross terms from the softmaxes.
+        let filt = val(info_nce_filtered(a, b, 0.1, sim, 0.8));
+        assert!(filt < plain, "{filt} {plain}");
+        let unit = |x: [f64; 2]| {
+            let n = (x[0] * x[0] + x[1] * x[1]).sqrt();
+            [x[0] / n, x[1] / n]
+        };
+        let av = [unit([1.0, 0.0]), unit([0.8, 0.6]), unit([0.0, 1.0])];
+        let bv = [unit([0.9, 0.1]), unit([0.7, 0.7]), unit([0.1, 0.9])];
+        let l = |i: usize, j: usize| (av[i][0] * bv[j][0] + av[i][1] * bv[j][1]) / 0.1;
+        let keep = |i: usize, j: usize| i == j || !((i == 0 && j == 1) || (i == 1 && j == 0));
+        let ce = |logit: &dyn Fn(usize, usize) -> f64| {
+            (0..3)
+                .map(|i| {
+                    let z: f64 = (0..3)
+                        .filter(|&j| keep(i, j))
+                        .map(|j| logit(i, j).exp())
+                        .sum();
+                    -(logit(i, i) - z.ln())
+                })
+                .sum::<f64>()
+                / 3.0
+        };
+        let want = (ce(&l) + ce(&|i, j| l(j, i))) / 2.0;
+        assert!((filt as f64 - want).abs() < 1e-4, "{filt} vs {want}");
+    }
 }
