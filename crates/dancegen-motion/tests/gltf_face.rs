@@ -167,3 +167,97 @@ fn a_face_of_the_wrong_length_or_joint_is_refused() {
     );
     assert!(!path.exists(), "nothing written on error");
 }
+
+fn blender() -> Option<std::path::PathBuf> {
+    let found = std::env::var_os("DANCEGEN_BLENDER")
+        .map(std::path::PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("PATH").and_then(|paths| {
+                std::env::split_paths(&paths)
+                    .map(|d| d.join("blender"))
+                    .find(|p| p.is_file())
+            })
+        });
+    if found.is_none() {
+        assert!(
+            std::env::var("DANCEGEN_REQUIRE_BLENDER").as_deref() != Ok("1"),
+            "DANCEGEN_REQUIRE_BLENDER=1 but no blender on PATH"
+        );
+        eprintln!("skipped: no blender on PATH (tools/test.sh installs it)");
+    }
+    found
+}
+
+/// Blender imports the face as 52 shape keys named after ARKit, animated frame for frame with
+/// the weights we wrote.
+#[test]
+fn blender_imports_the_face_as_arkit_shape_keys() {
+    let Some(blender) = blender() else { return };
+    let sk = Skeleton::smplh52_approx();
+    let frames = 30;
+    let (rot, trans, face) = motion(frames);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("face.glb");
+    write_glb_with_face(
+        &path,
+        &sk,
+        DancerAnimation {
+            local_rotations_axis_angle: &rot,
+            root_translation: &trans,
+        },
+        FaceAnimation {
+            weights: &face,
+            head_joint: HEAD,
+        },
+        30.0,
+        &GlbOptions::default(),
+    )
+    .unwrap();
+    let report = dir.path().join("face.json");
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/face_report.py");
+    let out = std::process::Command::new(&blender)
+        .args([
+            "-b",
+            "--factory-startup",
+            "-noaudio",
+            "--python-exit-code",
+            "1",
+            "--python",
+        ])
+        .arg(&script)
+        .arg("--")
+        .arg(&path)
+        .arg(&report)
+        .arg("0,7,29")
+        .output()
+        .expect("run blender");
+    assert!(
+        out.status.success() && report.exists(),
+        "blender could not import the face:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    eprintln!(
+        "blender: object {}, parent bone {}, {} animated keys",
+        r["object"], r["parent_bone"], r["animated_keys"]
+    );
+    let names: Vec<&str> = r["shape_keys"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(names, ARKIT_NAMES, "shape keys named after ARKit, in order");
+    assert_eq!(r["animated_keys"], 52);
+    let mut worst = 0.0f64;
+    for f in [0usize, 7, 29] {
+        let got = r["values"][f.to_string()].as_array().unwrap();
+        for (k, v) in got.iter().enumerate() {
+            worst = worst.max((v.as_f64().unwrap() - face.frame(f)[k] as f64).abs());
+        }
+    }
+    eprintln!("blender shape key values vs written weights: max error {worst:.1e}");
+    assert!(worst < 1e-4, "{worst}");
+}
