@@ -183,3 +183,111 @@ fn glb_renders_in_threejs_headless_chromium() {
         share * 100.0
     );
 }
+
+const FACE_PAGE: &str = r#"<!doctype html><html><head>
+<script type="importmap">{"imports":{"three":"/three/build/three.module.js","three/addons/":"/three/examples/jsm/"}}</script></head>
+<body><pre id="out">pending</pre><script type="module">
+import * as THREE from 'three';
+import {GLTFLoader} from 'three/addons/loaders/GLTFLoader.js';
+const out = document.getElementById('out');
+new GLTFLoader().load('/model.glb', (g) => {
+  let face = null;
+  g.scene.traverse((o) => { if (o.isMesh && o.morphTargetDictionary) face = o; });
+  const mixer = new THREE.AnimationMixer(g.scene);
+  mixer.clipAction(g.animations[0]).play();
+  mixer.setTime(10 / 30);
+  const names = Object.entries(face.morphTargetDictionary).sort((a, b) => a[1] - b[1]).map((e) => e[0]);
+  out.textContent = JSON.stringify({names, influences: Array.from(face.morphTargetInfluences),
+    parent: face.parent ? face.parent.name : null});
+}, undefined, (e) => { out.textContent = 'error ' + e; });
+</script></body></html>"#;
+
+/// three.js loads the face: 52 morph targets named after ARKit, and the animation mixer drives
+/// their influences to the weights written for that frame.
+#[test]
+fn face_morph_targets_play_in_threejs_headless_chromium() {
+    use dancegen_motion::face::{ARKIT_COUNT, ARKIT_NAMES, FaceWeights};
+    use dancegen_motion::gltf::{DancerAnimation, FaceAnimation, glb_bytes_with_face};
+    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .expect("this test needs Chromium (Debian: apt-get install chromium; .ci/run does)");
+    let sk = Skeleton::smplh52_approx();
+    let frames = 20;
+    let rot = vec![0.0f32; frames * 52 * 3];
+    let trans: Vec<f32> = (0..frames).flat_map(|_| [0.0, 0.9, 0.0]).collect();
+    let w: Vec<f32> = (0..frames * ARKIT_COUNT)
+        .map(|i| 0.5 + 0.5 * ((i / ARKIT_COUNT) as f32 * 0.4 + (i % ARKIT_COUNT) as f32).sin())
+        .collect();
+    let face = FaceWeights::new(w, 30.0).unwrap();
+    let glb = glb_bytes_with_face(
+        &sk,
+        DancerAnimation {
+            local_rotations_axis_angle: &rot,
+            root_translation: &trans,
+        },
+        FaceAnimation {
+            weights: &face,
+            head_joint: 15,
+        },
+        30.0,
+        &GlbOptions::default(),
+    )
+    .unwrap();
+    let port = serve(FACE_PAGE, glb, ensure_three());
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(chromium)
+        .args([
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--disable-quic",
+            "--virtual-time-budget=15000",
+            "--dump-dom",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            dir.path().join("profile").display()
+        ))
+        .arg(format!("http://127.0.0.1:{port}/index.html"))
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let json = dom
+        .split("<pre id=\"out\">")
+        .nth(1)
+        .and_then(|s| s.split("</pre>").next())
+        .unwrap_or_else(|| {
+            panic!(
+                "no result in the page:\n{dom}\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    let r: serde_json::Value = serde_json::from_str(&json.replace("&quot;", "\""))
+        .unwrap_or_else(|e| panic!("{e}: {json}"));
+    let names: Vec<&str> = r["names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(names, ARKIT_NAMES);
+    assert_eq!(r["parent"], "head");
+    let inf: Vec<f64> = r["influences"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let worst = inf
+        .iter()
+        .zip(face.frame(10))
+        .map(|(a, b)| (a - *b as f64).abs())
+        .fold(0.0, f64::max);
+    println!("three.js influences at frame 10 vs written weights: max error {worst:.1e}");
+    assert!(worst < 1e-4, "{worst}");
+}
