@@ -119,6 +119,11 @@ pub enum Representation {
     /// (dancer `k` in slot `k`, absent dancers zero). Windows reach the task raw; the task
     /// sorts, re-bases and normalises them (the normaliser is one dancer's 151 channels).
     Group,
+    /// SoulNet's split vector `[body 263 | hands 360 | face 52]` = 675 per frame
+    /// (`dancegen_motion::repr::holistic::split`, the face as ARKit weights) of the SMPL-H 52
+    /// motion made of the clip's body and its hands and face from `[data] holistic` (written by
+    /// `dancegen dataset build --holistic`); one frame shorter than the motion.
+    Holistic,
 }
 
 /// How the per-dimension statistics map the data.
@@ -166,6 +171,11 @@ pub struct DataConfig {
     /// (`dancegen_motion::repr::duet::leader_frames`); 0 = each frame's own heading.
     #[serde(default)]
     pub heading_sigma: f64,
+    /// Holistic data: directory of each clip's hands and face, `<dir>/<motion file stem>.npz`
+    /// (`hands` `(T, 30, 3)`, `face` `(T, 52)`; `dancegen dataset build --holistic` writes
+    /// `holistic/`). Required by `representation = "holistic"`.
+    #[serde(default)]
+    pub holistic: Option<PathBuf>,
     /// `normalizer = "mean_std"`: the smallest standard deviation a channel is scaled by
     /// (0 = none, the channel's own std unless below [`crate::data::MIN_STD`]). Channels that
     /// barely move in the data, such as the SMPL hand joints of retargeted BVH (6D std down to

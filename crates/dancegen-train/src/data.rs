@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 
 use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
 use dancegen_motion::repr::{
-    DuetFollower, DuetLeader, Edge151, HumanMl263, Lodge139, MinMaxNormalizer, SmplMotion,
+    DuetFollower, DuetLeader, Edge151, Holistic623, HumanMl263, Lodge139, MinMaxNormalizer,
+    SmplMotion,
 };
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
@@ -182,8 +183,13 @@ pub fn representation_dims(r: Representation) -> usize {
         Representation::Humanml263 => 263,
         Representation::Duet => DuetFollower::DIMS + DuetLeader::DIMS,
         Representation::Group => GROUP_SLOTS * Edge151::DIMS,
+        Representation::Holistic => HOLISTIC_DIMS,
     }
 }
+
+/// Values per frame of [`Representation::Holistic`]: body 263 + hands 360 + 52 ARKit weights.
+pub const HOLISTIC_DIMS: usize =
+    dancegen_motion::repr::holistic::split::BODY_HAND_DIMS + dancegen_motion::face::ARKIT_COUNT;
 
 /// Dancer slots of a group frame (TCDiff++'s N_max; `dancegen_motion::formation` templates go
 /// up to the same count).
@@ -328,8 +334,50 @@ fn encode(r: Representation, m: &SmplMotion) -> Result<Vec<f32>, String> {
         Representation::Humanml263 => HumanMl263::encode(m),
         Representation::Duet => unreachable!("duet clips are encoded in pairs (encode_duet)"),
         Representation::Group => unreachable!("group clips are read by load_group_clip"),
+        Representation::Holistic => unreachable!("holistic clips are encoded by encode_holistic"),
     }
     .map_err(|e| e.to_string())
+}
+
+/// [`Representation::Holistic`] frames of an SMPL 24 body and its hands and face file: SMPL-H 52
+/// = body joints 0–21 + the 30 finger joints, encoded as [`Holistic623`], permuted to SoulNet's
+/// split layout, frame `t`'s face appended to row `t`.
+fn encode_holistic(m: &SmplMotion, npz: &Path) -> Result<Vec<f32>, String> {
+    use dancegen_motion::face::ARKIT_COUNT;
+    use dancegen_motion::repr::holistic::{JOINTS, split};
+    let members = dancegen_io::read_npz(npz).map_err(|e| e.to_string())?;
+    let get = |name: &str, shape: &[usize]| -> Result<Vec<f32>, String> {
+        let a = members
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, a)| a)
+            .ok_or_else(|| format!("{}: no `{name}` array", npz.display()))?;
+        if a.shape != shape {
+            return Err(format!(
+                "{}: `{name}` has shape {:?}, expected {shape:?} for a {}-frame body",
+                npz.display(),
+                a.shape,
+                m.frames()
+            ));
+        }
+        Ok(a.data.iter().map(|&v| v as f32).collect())
+    };
+    let t = m.frames();
+    let hands = get("hands", &[t, JOINTS - 22, 3])?;
+    let face = get("face", &[t, ARKIT_COUNT])?;
+    let mut poses = Vec::with_capacity(t * JOINTS * 3);
+    for f in 0..t {
+        poses.extend_from_slice(&m.poses[f * 72..f * 72 + 22 * 3]);
+        poses.extend_from_slice(&hands[f * 90..(f + 1) * 90]);
+    }
+    let inter = Holistic623::encode(&poses, &m.trans, m.fps).map_err(|e| e.to_string())?;
+    let body_hands = split::to_split(&inter, 0).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity((t - 1) * HOLISTIC_DIMS);
+    for (f, row) in body_hands.chunks_exact(split::BODY_HAND_DIMS).enumerate() {
+        out.extend_from_slice(row);
+        out.extend_from_slice(&face[f * ARKIT_COUNT..(f + 1) * ARKIT_COUNT]);
+    }
+    Ok(out)
 }
 
 /// Duet frames `[follower 151 | leader 220]` of a follower and its leader (cut to the shorter).
@@ -436,10 +484,25 @@ pub fn load_clips(path: &Path, c: &DataConfig) -> Result<Vec<Clip>, TrainError> 
     };
     let dims = representation_dims(c.representation);
     let mut clips = Vec::new();
+    let holistic = match (c.representation, &c.holistic) {
+        (Representation::Holistic, Some(dir)) => {
+            let stem = path.file_stem().unwrap_or_default();
+            Some(dir.join(stem).with_extension("npz"))
+        }
+        (Representation::Holistic, None) => {
+            return Err(data_err(
+                "representation \"holistic\" needs [data] holistic (the directory of the \
+                 hands and faces, `dataset build --holistic`)"
+                    .into(),
+            ));
+        }
+        _ => None,
+    };
     for m in &dancers {
-        let mut motion = match &leader {
-            Some(l) => encode_duet(m, l, c.heading_sigma),
-            None => encode(c.representation, m),
+        let mut motion = match (&leader, &holistic) {
+            (Some(l), _) => encode_duet(m, l, c.heading_sigma),
+            (None, Some(h)) => encode_holistic(m, h),
+            (None, None) => encode(c.representation, m),
         }
         .map_err(data_err)?;
         let mut frames = motion.len() / dims;

@@ -10,12 +10,13 @@ pub mod bundle_files;
 pub mod lodgepp;
 pub mod motion_autoencoder;
 pub mod reactdance;
+pub mod soulnet;
 pub mod tcdiffpp;
 
 pub use motion_autoencoder::MotionAutoencoderTask;
 
 /// Every `[model] kind` with a task.
-pub const KINDS: [&str; 7] = [
+pub const KINDS: [&str; 8] = [
     motion_autoencoder::KIND,
     lodgepp::VQVAE,
     lodgepp::GPT,
@@ -23,6 +24,7 @@ pub const KINDS: [&str; 7] = [
     reactdance::HFSQ,
     reactdance::LDM,
     tcdiffpp::KIND,
+    soulnet::KIND,
 ];
 
 /// Starts a new run of the task `config` names (`config_path` for error messages).
@@ -71,6 +73,12 @@ pub fn train_config(
             config,
             opts,
         ),
+        soulnet::KIND => trainer::train(
+            &soulnet::SoulnetVqTask::from_config(config)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }
@@ -113,6 +121,12 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
         ),
         tcdiffpp::KIND => trainer::resume(
             &tcdiffpp::GroupTask::from_config(&config)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        soulnet::KIND => trainer::resume(
+            &soulnet::SoulnetVqTask::from_config(&config)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,
