@@ -58,6 +58,8 @@ pub struct SamplingDefaults {
     /// Keep planted feet in place: root lock, then leg IK (`dancegen_lodgepp::planted_feet`;
     /// not part of Lodge++).
     pub foot_lock: bool,
+    /// When a foot counts as planted for the foot lock (absent in older bundles: `either`).
+    pub foot_lock_rule: crate::planted_feet::PlantedRule,
 }
 
 impl Default for SamplingDefaults {
@@ -72,6 +74,7 @@ impl Default for SamplingDefaults {
             penetration_steps: 10,
             max_beat_shift: 6,
             foot_lock: true,
+            foot_lock_rule: crate::planted_feet::PlantedRule::Either,
         }
     }
 }

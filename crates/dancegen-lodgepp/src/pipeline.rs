@@ -55,6 +55,8 @@ pub struct GenerateOptions {
     /// Post-processing: planted feet stay in place
     /// ([`crate::planted_feet::clean_planted_feet`]).
     pub foot_lock: bool,
+    /// When a foot counts as planted for the foot lock.
+    pub foot_lock_rule: crate::planted_feet::PlantedRule,
 }
 
 impl GenerateOptions {
@@ -83,6 +85,7 @@ impl GenerateOptions {
             },
             max_beat_shift: s.max_beat_shift,
             foot_lock: s.foot_lock,
+            foot_lock_rule: s.foot_lock_rule,
         }
     }
 }
@@ -197,7 +200,7 @@ impl SoloModel {
             );
         }
         if opts.foot_lock {
-            let ik = crate::planted_feet::clean_planted_feet(&mut out);
+            let ik = crate::planted_feet::clean_planted_feet_with(&mut out, opts.foot_lock_rule);
             tracing::debug!(
                 adjusted = ik.adjusted,
                 unreached_m = ik.max_unreached_m,

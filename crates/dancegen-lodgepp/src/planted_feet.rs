@@ -3,10 +3,13 @@
 //! pins every planted ankle and toe ([`pin_planted_feet`], `dancegen_motion::foot_ik`).
 //! Neither is part of Lodge++; `--no-foot-lock` switches both off.
 //!
-//! A foot is planted where the model's contact channel says so or where it is near the floor:
-//! within the contact heights the Foot Refine Block uses (LODGE's labels, ankle 12 cm, toe
-//! 5 cm) of the height the supporting foot stands at ([`GroundMode::SupportFeet`], the floor
-//! `dancegen generate` puts the dance on).
+//! Which feet are planted is a [`PlantedRule`] over two signals: the model's contact channel
+//! (EDGE's label: the joint hardly moves) and nearness to the floor (within the contact heights
+//! the Foot Refine Block uses — LODGE's labels, ankle 12 cm, toe 5 cm — of the height the
+//! supporting foot stands at, [`GroundMode::SupportFeet`], the floor `dancegen generate` puts
+//! the dance on). [`PlantedRule::Either`] was the first rule; it pins too much for dance
+//! footwork: in the 29 real salsa/AIST++ clips of the solo set a foot is within those heights
+//! in 76 % of frames while moving at 0.98 m/s on average (issue 16, docs/solo-data-v2.md).
 
 use dancegen_motion::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
 use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, planted_feet_offsets};
@@ -30,16 +33,38 @@ pub const IK_BLEND_FRAMES: usize = 4;
 /// no longer removes.
 pub const ROOT_LOCK_SMOOTHING_FRAMES: f64 = 2.0;
 
-/// Both passes: root lock, then leg IK.
+/// When a foot counts as planted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantedRule {
+    /// The model's contact label **or** near the floor (the rule of the first bundles).
+    #[default]
+    Either,
+    /// The model's contact label **and** near the floor: a low foot the model moves is left
+    /// to move (slides and steps close to the floor), a lifted foot is never pinned.
+    Both,
+}
+
+/// Both passes: root lock, then leg IK ([`PlantedRule::Either`]).
 pub fn clean_planted_feet(frames: &mut [f32]) -> FootIkReport {
-    lock_planted_feet(frames);
-    pin_planted_feet(frames)
+    clean_planted_feet_with(frames, PlantedRule::Either)
+}
+
+/// Both passes with a chosen [`PlantedRule`].
+pub fn clean_planted_feet_with(frames: &mut [f32], rule: PlantedRule) -> FootIkReport {
+    lock_planted_feet_with(frames, rule);
+    pin_planted_feet_with(frames, rule)
 }
 
 /// Moves the root's horizontal path so the support foot does not glide (the correction
-/// smoothed over [`ROOT_LOCK_SMOOTHING_FRAMES`]).
+/// smoothed over [`ROOT_LOCK_SMOOTHING_FRAMES`]; [`PlantedRule::Either`]).
 pub fn lock_planted_feet(frames: &mut [f32]) {
-    let Some((feet, contact)) = feet_and_contacts(frames) else {
+    lock_planted_feet_with(frames, PlantedRule::Either)
+}
+
+/// [`lock_planted_feet`] with a chosen [`PlantedRule`].
+pub fn lock_planted_feet_with(frames: &mut [f32], rule: PlantedRule) {
+    let Some((feet, contact)) = feet_and_contacts(frames, rule) else {
         return;
     };
     // Z-up: the root's horizontal channels are x and y.
@@ -56,9 +81,14 @@ pub fn lock_planted_feet(frames: &mut [f32]) {
 }
 
 /// Leg IK: every planted ankle and toe holds the mean place of its contact run; the hips',
-/// knees' and ankles' 6D channels change, nothing else.
+/// knees' and ankles' 6D channels change, nothing else ([`PlantedRule::Either`]).
 pub fn pin_planted_feet(frames: &mut [f32]) -> FootIkReport {
-    let Some((_, contact)) = feet_and_contacts(frames) else {
+    pin_planted_feet_with(frames, PlantedRule::Either)
+}
+
+/// [`pin_planted_feet`] with a chosen [`PlantedRule`].
+pub fn pin_planted_feet_with(frames: &mut [f32], rule: PlantedRule) -> FootIkReport {
+    let Some((_, contact)) = feet_and_contacts(frames, rule) else {
         return FootIkReport::default();
     };
     let t = frames.len() / DIMS;
@@ -119,8 +149,8 @@ pub fn pin_planted_feet(frames: &mut [f32]) -> FootIkReport {
 }
 
 /// The feet `[T, 4, 3]` (world, metres, Z-up) and their contacts `[T, 4]` (the model's label
-/// or 1 near the floor), in [`FEET`] order; `None` for no frames.
-fn feet_and_contacts(frames: &[f32]) -> Option<(Vec<f32>, Vec<f32>)> {
+/// combined with nearness to the floor by `rule`), in [`FEET`] order; `None` for no frames.
+fn feet_and_contacts(frames: &[f32], rule: PlantedRule) -> Option<(Vec<f32>, Vec<f32>)> {
     let t = frames.len() / DIMS;
     if t == 0 {
         return None;
@@ -144,7 +174,10 @@ fn feet_and_contacts(frames: &[f32]) -> Option<(Vec<f32>, Vec<f32>)> {
         .chunks_exact(DIMS)
         .flat_map(|f| f[CONTACTS].iter().copied())
         .zip(near)
-        .map(|(label, low)| label.max(low))
+        .map(|(label, low)| match rule {
+            PlantedRule::Either => label.max(low),
+            PlantedRule::Both => label.min(low),
+        })
         .collect();
     Some((feet, contact))
 }

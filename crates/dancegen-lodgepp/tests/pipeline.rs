@@ -417,3 +417,35 @@ fn leg_ik_holds_both_planted_feet_when_one_leg_swings() {
         }
     }
 }
+
+/// `PlantedRule::Both`: a low foot the model labels free is left to glide (footwork that slides
+/// close to the floor); `Either` pins it. With the label on, both rules hold it.
+#[test]
+fn planted_rule_both_leaves_a_low_unlabelled_foot_alone() {
+    use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_with};
+    let t = 20;
+    let gliding = |label: f32| {
+        let mut frames = Vec::with_capacity(t * DIMS);
+        for f in 0..t {
+            let mut fr = rest_frame();
+            fr[4] = 0.02 * f as f32;
+            fr[..4].iter_mut().for_each(|c| *c = label);
+            frames.extend(fr);
+        }
+        frames
+    };
+    let travel = |frames: &[f32]| frames[(t - 1) * DIMS + 4] - frames[4];
+    for (label, rule, want) in [
+        (0.0, PlantedRule::Either, 0.0),
+        (0.0, PlantedRule::Both, 0.02 * (t - 1) as f32),
+        (1.0, PlantedRule::Both, 0.0),
+    ] {
+        let mut frames = gliding(label);
+        lock_planted_feet_with(&mut frames, rule);
+        let got = travel(&frames);
+        assert!(
+            (got - want).abs() < 1e-4,
+            "label {label}, {rule:?}: travel {got}, want {want}"
+        );
+    }
+}
