@@ -106,12 +106,34 @@ fn serve(page: &'static str, glb: Vec<u8>, three: PathBuf) -> u16 {
     port
 }
 
-#[test]
-fn glb_renders_in_threejs_headless_chromium() {
-    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+/// The Chromium binary (Debian's package).
+fn chromium() -> &'static str {
+    ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
         .into_iter()
         .find(|p| Path::new(p).exists())
-        .expect("this test needs Chromium (Debian: apt-get install chromium; .ci/run does)");
+        .expect("this test needs Chromium (Debian: apt-get install chromium; .ci/run does)")
+}
+
+/// Headless Chromium with a throw-away profile in `dir`, no network beyond the page, and 15 s
+/// of virtual time for the page's scripts.
+fn headless_chromium(dir: &Path) -> Command {
+    let mut c = Command::new(chromium());
+    c.args([
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--disable-quic",
+        "--virtual-time-budget=15000",
+    ])
+    .arg(format!("--user-data-dir={}", dir.join("profile").display()));
+    c
+}
+
+#[test]
+fn glb_renders_in_threejs_headless_chromium() {
     let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
     let m = load_motion(shared.join("data/aistpp/motions/gBR_sBM_cAll_d04_mBR2_ch08.pkl")).unwrap();
     let motion = SmplMotion::from_aistpp(&m);
@@ -128,23 +150,8 @@ fn glb_renders_in_threejs_headless_chromium() {
     .unwrap();
     let port = serve(PAGE, std::fs::read(&glb_path).unwrap(), ensure_three());
     let shot = dir.path().join("shot.png");
-    let out = Command::new(chromium)
-        .args([
-            "--headless=new",
-            "--no-sandbox",
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--disable-quic",
-            "--virtual-time-budget=15000",
-        ])
-        .arg(format!(
-            "--user-data-dir={}",
-            dir.path().join("profile").display()
-        ))
+    let out = headless_chromium(dir.path())
+        .args(["--use-angle=swiftshader", "--enable-unsafe-swiftshader"])
         .arg(format!("--window-size={SIZE},{SIZE}"))
         .arg(format!("--screenshot={}", shot.display()))
         .arg(format!("http://127.0.0.1:{port}/index.html"))
@@ -208,10 +215,6 @@ new GLTFLoader().load('/model.glb', (g) => {
 fn face_morph_targets_play_in_threejs_headless_chromium() {
     use dancegen_motion::face::{ARKIT_COUNT, ARKIT_NAMES, FaceWeights};
     use dancegen_motion::gltf::{DancerAnimation, FaceAnimation, glb_bytes_with_face};
-    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect("this test needs Chromium (Debian: apt-get install chromium; .ci/run does)");
     let sk = Skeleton::smplh52_approx();
     let frames = 20;
     let rot = vec![0.0f32; frames * 52 * 3];
@@ -236,23 +239,8 @@ fn face_morph_targets_play_in_threejs_headless_chromium() {
     .unwrap();
     let port = serve(FACE_PAGE, glb, ensure_three());
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(chromium)
-        .args([
-            "--headless=new",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--disable-quic",
-            "--virtual-time-budget=15000",
-            "--dump-dom",
-        ])
-        .arg(format!(
-            "--user-data-dir={}",
-            dir.path().join("profile").display()
-        ))
+    let out = headless_chromium(dir.path())
+        .args(["--disable-gpu", "--dump-dom"])
         .arg(format!("http://127.0.0.1:{port}/index.html"))
         .output()
         .unwrap();

@@ -181,10 +181,8 @@ pub fn commitment<const D: usize>(encoded: Tensor<D>, quantized: Tensor<D>) -> T
     (encoded - quantized.detach()).powf_scalar(2.0).mean()
 }
 
-/// Symmetric InfoNCE of paired embeddings `a`, `b` `[N, d]` (row `i` of each is a positive
-/// pair): cross-entropy of the cosine-similarity logits `/ temperature` in both directions.
-pub fn info_nce(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<1> {
-    let n = a.dims()[0];
+/// Cosine-similarity logits `[N, N]` of `a`, `b` `[N, d]`, divided by `temperature`.
+fn cosine_logits(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<2> {
     let norm = |v: Tensor<2>| {
         let l = v
             .clone()
@@ -194,11 +192,22 @@ pub fn info_nce(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<1> {
             .clamp_min(1e-12);
         v / l
     };
-    let logits = norm(a).matmul(norm(b).transpose()) / temperature;
+    norm(a).matmul(norm(b).transpose()) / temperature
+}
+
+/// Cross-entropy of the diagonal of `[N, N]` logits, rows then columns, averaged.
+fn symmetric_diagonal_ce(logits: Tensor<2>) -> Tensor<1> {
+    let n = logits.dims()[0];
     let device: Device = logits.device();
     let diag = Tensor::<1, Int>::arange(0..n as i64, &device).reshape([n, 1]);
     let ce = |l: Tensor<2>| -> Tensor<1> { log_softmax(l, 1).gather(1, diag.clone()).mean().neg() };
     (ce(logits.clone()) + ce(logits.transpose())) / 2.0
+}
+
+/// Symmetric InfoNCE of paired embeddings `a`, `b` `[N, d]` (row `i` of each is a positive
+/// pair): cross-entropy of the cosine-similarity logits `/ temperature` in both directions.
+pub fn info_nce(a: Tensor<2>, b: Tensor<2>, temperature: f64) -> Tensor<1> {
+    symmetric_diagonal_ce(cosine_logits(a, b, temperature))
 }
 
 /// [`info_nce`] with TMR's negative filtering (`InfoNCE_with_filtering`, which SoulNet's MMR
@@ -215,26 +224,13 @@ pub fn info_nce_filtered(
     threshold: f64,
 ) -> Tensor<1> {
     let n = a.dims()[0];
-    let norm = |v: Tensor<2>| {
-        let l = v
-            .clone()
-            .powf_scalar(2.0)
-            .sum_dim(1)
-            .sqrt()
-            .clamp_min(1e-12);
-        v / l
-    };
-    let logits = norm(a).matmul(norm(b).transpose()) / temperature;
-    let device: Device = logits.device();
-    let eye = Tensor::<2>::eye(n, &device).bool();
+    let logits = cosine_logits(a, b, temperature);
+    let eye = Tensor::<2>::eye(n, &logits.device()).bool();
     let drop = pair_similarity
         .greater_elem(threshold)
         .bool_and(eye.bool_not());
     // A large negative rather than −∞: exp underflows to 0 without NaN gradients.
-    let logits = logits.mask_fill(drop, -1e9);
-    let diag = Tensor::<1, Int>::arange(0..n as i64, &device).reshape([n, 1]);
-    let ce = |l: Tensor<2>| -> Tensor<1> { log_softmax(l, 1).gather(1, diag.clone()).mean().neg() };
-    (ce(logits.clone()) + ce(logits.transpose())) / 2.0
+    symmetric_diagonal_ce(logits.mask_fill(drop, -1e9))
 }
 
 /// Hinge loss of the discriminator: `mean(relu(1 − D(real))) + mean(relu(1 + D(fake)))`.

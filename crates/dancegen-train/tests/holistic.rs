@@ -30,6 +30,13 @@ fn write_holistic(dir: &Path, frames: usize) {
     .unwrap();
 }
 
+fn quiet() -> RunOptions {
+    RunOptions {
+        quiet: true,
+        stop_at: None,
+    }
+}
+
 fn config(run: &Path, holistic: &Path, quantizer: &str) -> TrainConfig {
     let text = format!(
         r#"
@@ -80,15 +87,8 @@ fn soulnet_vq_trains_for_every_quantizer_kind() {
         let c = config(&run, &hol, kind);
         let task = SoulnetVqTask::from_config(&c).unwrap();
         assert_eq!(task.kind(), "soulnet_vq");
-        let summary = dancegen_train::tasks::train_config(
-            &c,
-            &run.join("config.toml"),
-            &RunOptions {
-                quiet: true,
-                stop_at: None,
-            },
-        )
-        .unwrap_or_else(|e| panic!("{kind}: {e}"));
+        let summary = dancegen_train::tasks::train_config(&c, &run.join("config.toml"), &quiet())
+            .unwrap_or_else(|e| panic!("{kind}: {e}"));
         assert!(
             run.join("model.safetensors").is_file(),
             "{kind}: {summary:?}"
@@ -116,16 +116,9 @@ fn bad_hands_or_face_files_are_named() {
     write_holistic(&hol, FRAMES - 10);
     let run = dir.path().join("run");
     let c = config(&run, &hol, "hrvq");
-    let e = dancegen_train::tasks::train_config(
-        &c,
-        &run.join("config.toml"),
-        &RunOptions {
-            quiet: true,
-            stop_at: None,
-        },
-    )
-    .unwrap_err()
-    .to_string();
+    let e = dancegen_train::tasks::train_config(&c, &run.join("config.toml"), &quiet())
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains(".npz") && e.contains("hands") && e.contains("shape"),
         "{e}"
@@ -133,16 +126,9 @@ fn bad_hands_or_face_files_are_named() {
     // No [data] holistic: says what is missing.
     let mut c = config(&run, &hol, "hrvq");
     c.data.holistic = None;
-    let e = dancegen_train::tasks::train_config(
-        &c,
-        &run.join("config.toml"),
-        &RunOptions {
-            quiet: true,
-            stop_at: None,
-        },
-    )
-    .unwrap_err()
-    .to_string();
+    let e = dancegen_train::tasks::train_config(&c, &run.join("config.toml"), &quiet())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("[data] holistic"), "{e}");
     // The wrong representation for the task.
     let mut c = config(&run, &hol, "hrvq");
