@@ -192,7 +192,7 @@ mod tests {
     /// contrastive training, each dance retrieves its own music far above chance (1/16).
     #[test]
     fn contrastive_training_retrieves_the_right_music() {
-        use burn::optim::{AdamWConfig, GradientsParams, Optimizer};
+        use burn::optim::{AdamWConfig, GradientsParams};
         let dev = device::training();
         dev.seed(4);
         let (b, t) = (16usize, 24usize);
@@ -237,14 +237,14 @@ mod tests {
             .forward(motion, None)
             .into_data()
             .convert::<f32>()
-            .to_vec()
+            .try_to_vec::<f32>()
             .unwrap();
         let za: Vec<f32> = model
             .music
             .forward(music, None)
             .into_data()
             .convert::<f32>()
-            .to_vec()
+            .try_to_vec::<f32>()
             .unwrap();
         let d = 16;
         let cos = |i: usize, j: usize| {
