@@ -99,6 +99,12 @@ pub struct SynthInputs<'a> {
 /// Synthesises both hands (see the module documentation).
 pub fn synthesize_hands(inp: &SynthInputs) -> SyntheticHands {
     let t = inp.joints.len() / (BODY_JOINTS * 3);
+    if t == 0 {
+        return SyntheticHands {
+            axis_angles: Vec::new(),
+            targets: Vec::new(),
+        };
+    }
     let mut rng = SplitMix64(inp.seed ^ 0x68616e6473); // "hands"
     let energy = unit_scale(&smooth(
         &inp.onset[..t.min(inp.onset.len())],

@@ -68,8 +68,12 @@ pub const ARKIT_NAMES: [&str; ARKIT_COUNT] = [
 /// Index of an ARKit name, ignoring the case of the first letter (`EyeBlinkLeft` and
 /// `eyeBlinkLeft` both match), so Live Link's PascalCase columns resolve too.
 pub fn arkit_index(name: &str) -> Option<usize> {
+    // Byte slicing is safe here: every ARKit name is ASCII, and a name whose first byte is not
+    // ASCII cannot match (compared as bytes, never sliced at a char boundary).
+    let b = name.as_bytes();
     ARKIT_NAMES.iter().position(|n| {
-        n.len() == name.len() && n[..1].eq_ignore_ascii_case(&name[..1]) && n[1..] == name[1..]
+        let nb = n.as_bytes();
+        nb.len() == b.len() && nb[0].eq_ignore_ascii_case(&b[0]) && nb[1..] == b[1..]
     })
 }
 
@@ -172,6 +176,10 @@ mod tests {
         assert_eq!(arkit_index("JawOpen"), Some(17));
         assert_eq!(arkit_index("jawopen"), None);
         assert_eq!(arkit_index("HeadYaw"), None);
+        // Bad input from a CSV header: no panic on multi-byte text or an empty name.
+        assert_eq!(arkit_index("ñwOpen"), None); // 7 bytes, as "jawOpen"
+        assert_eq!(arkit_index("éyeBlinkLeft"), None);
+        assert_eq!(arkit_index(""), None);
     }
 
     #[test]
