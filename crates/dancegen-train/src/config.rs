@@ -99,7 +99,7 @@ fn default_keep_checkpoints() -> usize {
 }
 
 /// `[model]` keys that hold paths (resolved like `[data] paths`).
-pub const MODEL_PATH_KEYS: &[&str] = &["vqvae", "hfsq"];
+pub const MODEL_PATH_KEYS: &[&str] = &["vqvae", "hfsq", "vq", "mmr"];
 
 /// Per-frame vector the motion files are converted to (`dancegen_motion::repr`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -337,6 +337,9 @@ impl TrainConfig {
         }
         if let Some(l) = &mut c.data.leader {
             *l = abs(l);
+        }
+        if let Some(h) = &mut c.data.holistic {
+            *h = abs(h);
         }
         // Paths inside `[model]` (e.g. the VQ-VAE run a GPT trains on) are relative to this
         // file too; resolved here so the run's own config copy (used by `--resume`) has them.
