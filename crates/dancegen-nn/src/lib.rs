@@ -34,6 +34,7 @@ pub mod part_autoencoder;
 pub mod pos_encoding;
 pub mod progress;
 pub mod quant;
+pub mod residual_transformer;
 pub mod retrieval;
 pub mod rng;
 pub mod ssm;
