@@ -16,7 +16,7 @@ pub mod tcdiffpp;
 pub use motion_autoencoder::MotionAutoencoderTask;
 
 /// Every `[model] kind` with a task.
-pub const KINDS: [&str; 8] = [
+pub const KINDS: [&str; 10] = [
     motion_autoencoder::KIND,
     lodgepp::VQVAE,
     lodgepp::GPT,
@@ -25,6 +25,8 @@ pub const KINDS: [&str; 8] = [
     reactdance::LDM,
     tcdiffpp::KIND,
     soulnet::KIND,
+    soulnet::MMR,
+    soulnet::MAGM,
 ];
 
 /// Starts a new run of the task `config` names (`config_path` for error messages).
@@ -79,6 +81,18 @@ pub fn train_config(
             config,
             opts,
         ),
+        soulnet::MMR => trainer::train(
+            &soulnet::SoulnetMmrTask::from_config(config)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
+        soulnet::MAGM => trainer::train(
+            &soulnet::SoulnetMagmTask::from_config(config, config_path)
+                .map_err(|r| lodgepp::config_error(config_path, r))?,
+            config,
+            opts,
+        ),
         _ => unreachable!("kind() only returns known kinds"),
     }
 }
@@ -127,6 +141,18 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
         ),
         soulnet::KIND => trainer::resume(
             &soulnet::SoulnetVqTask::from_config(&config)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        soulnet::MMR => trainer::resume(
+            &soulnet::SoulnetMmrTask::from_config(&config)
+                .map_err(|r| lodgepp::config_error(&path, r))?,
+            run_dir,
+            opts,
+        ),
+        soulnet::MAGM => trainer::resume(
+            &soulnet::SoulnetMagmTask::from_config(&config, &path)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,

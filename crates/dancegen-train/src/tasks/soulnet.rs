@@ -1,188 +1,97 @@
-//! SoulNet's part autoencoder (`dancegen_nn::part_autoencoder`, the HRVQ-VAE of issue 19) on
-//! holistic windows `[body 263 | hands 360 | face 52]` (`representation = "holistic"`).
+//! The three networks of the holistic system (`dancegen_soulnet`, SoulNet), each its own run on
+//! holistic windows `[body 263 | hands 360 | face 52]` (`representation = "holistic"`):
+//! - `soulnet_vq`: the part autoencoder (HRVQ-VAE; `quantizer = "rvq" | "vq"` for the ablation),
+//!   `[model]` = [`VqTable`];
+//! - `soulnet_mmr`: the music–motion retrieval encoders, `[model]` = [`MmrTable`], needs
+//!   `[data.music]` (35 features);
+//! - `soulnet_magm`: the masked + residual transformers on the tokens of a finished
+//!   `soulnet_vq` run, conditioned by a finished `soulnet_mmr` run's music encoder:
+//!   `[model] vq = "<run>"`, `mmr = "<run>"`, `[model.generator]` = [`GeneratorTable`].
 //!
-//! `[model]` keys (defaults in brackets; SoulNet's own values in `holistic.md` §1.2 are width
-//! 512, depth 3, 512 codes × 512, 6 levels, which do not fit this machine's budget):
+//! `dancegen bundle --holistic-vq --holistic-mmr --holistic-generator` joins the three runs into
+//! a model directory ([`assemble_holistic_bundle`]).
 //!
-//! ```toml
-//! kind = "soulnet_vq"
-//! quantizer = "hrvq"        # "hrvq" (linked) | "rvq" (independent stacks) | "vq" (one level)
-//! num_quantizers = 6        # residual levels (hrvq, rvq) [6]
-//! nb_code = 512             # codes per codebook [512]
-//! code_dim = 128            # one part's latent width [128]
-//! mu = 0.99                 # EMA decay [0.99]
-//! quantize_dropout_prob = 0.2   # [0.2]
-//! width = 256               # conv channels [256]
-//! depth = 2                 # residual blocks per stage [2]
-//! down_t = 2                # ×2 downsamplings [2]
-//! dilation_growth_rate = 3  # [3]
-//! recon = "smooth_l1"       # "l1" | "l2" | "smooth_l1" [smooth_l1, as SoulNet]
-//! part_weights = [1.0, 1.0, 1.0]   # body, hands, face [equal, as the released code]
-//! velocity_weight = 0.5     # [0.5]
-//! commit_weight = 0.02      # [0.02]
-//! ```
+//! SoulNet's own sizes (holistic.md §1.2: width 512, depth 3, 512 codes × 512, 6 levels) do not
+//! fit this machine's budget; `configs/soulnet_small_*.toml` are the shipped model's.
 
-use dancegen_nn::burn::tensor::Device;
-use dancegen_nn::conv::ConvCodecConfig;
-use dancegen_nn::loss::Distance;
-use dancegen_nn::part_autoencoder::{PartAutoencoder, PartAutoencoderConfig, PartQuantizerConfig};
-use dancegen_nn::quant::hrvq::HierarchicalRvqConfig;
-use dancegen_nn::quant::rvq::ResidualVqConfig;
-use dancegen_nn::quant::vq::EmaVqConfig;
+use std::path::{Path, PathBuf};
+
+use dancegen_nn::burn::tensor::{Device, Tensor};
+use dancegen_nn::device;
+use dancegen_nn::part_autoencoder::PartAutoencoder;
+use dancegen_nn::retrieval::MusicMotionRetrieval;
+use dancegen_nn::weights::{self, Layout};
+use dancegen_soulnet::config::{GeneratorTable, MmrTable};
+use dancegen_soulnet::generator::{Condition, PartGenerator, music_tokens};
+use dancegen_soulnet::layout::MUSIC_DIMS;
 use serde::{Deserialize, Serialize};
+
+pub use dancegen_soulnet::config::{QuantizerKind, VqTable};
+/// The `soulnet_vq` `[model]` table (kept under its first name).
+pub type SoulnetVqTable = VqTable;
 
 use crate::config::{Representation, TrainConfig};
 use crate::data::Batch;
+use crate::files;
 use crate::task::{Losses, TrainTask};
 
-/// `[model] kind`.
+/// `[model] kind` of the part autoencoder.
 pub const KIND: &str = "soulnet_vq";
+/// `[model] kind` of the retrieval model.
+pub const MMR: &str = "soulnet_mmr";
+/// `[model] kind` of the generator.
+pub const MAGM: &str = "soulnet_magm";
 
 /// The split layout's part widths with the 52 ARKit weights as the face.
-pub const PARTS: [usize; 3] = [263, 360, 52];
+pub const PARTS: [usize; 3] = dancegen_soulnet::layout::PART_DIMS;
 
-/// Which quantizer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum QuantizerKind {
-    Hrvq,
-    Rvq,
-    Vq,
-}
-
-/// The `[model]` table (see the module documentation).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SoulnetVqTable {
-    #[serde(default = "d_quantizer")]
-    pub quantizer: QuantizerKind,
-    #[serde(default = "d_levels")]
-    pub num_quantizers: usize,
-    #[serde(default = "d_codes")]
-    pub nb_code: usize,
-    #[serde(default = "d_code_dim")]
-    pub code_dim: usize,
-    #[serde(default = "d_mu")]
-    pub mu: f64,
-    #[serde(default = "d_dropout")]
-    pub quantize_dropout_prob: f64,
-    #[serde(default = "d_width")]
-    pub width: usize,
-    #[serde(default = "d_depth")]
-    pub depth: usize,
-    #[serde(default = "d_down")]
-    pub down_t: usize,
-    #[serde(default = "d_dilation")]
-    pub dilation_growth_rate: usize,
-    #[serde(default = "d_recon")]
-    pub recon: Distance,
-    #[serde(default = "d_part_weights")]
-    pub part_weights: [f64; 3],
-    #[serde(default = "d_velocity")]
-    pub velocity_weight: f64,
-    #[serde(default = "d_commit")]
-    pub commit_weight: f64,
-}
-
-fn d_quantizer() -> QuantizerKind {
-    QuantizerKind::Hrvq
-}
-fn d_levels() -> usize {
-    6
-}
-fn d_codes() -> usize {
-    512
-}
-fn d_code_dim() -> usize {
-    128
-}
-fn d_mu() -> f64 {
-    0.99
-}
-fn d_dropout() -> f64 {
-    0.2
-}
-fn d_width() -> usize {
-    256
-}
-fn d_depth() -> usize {
-    2
-}
-fn d_down() -> usize {
-    2
-}
-fn d_dilation() -> usize {
-    3
-}
-fn d_recon() -> Distance {
-    Distance::SmoothL1
-}
-fn d_part_weights() -> [f64; 3] {
-    [1.0; 3]
-}
-fn d_velocity() -> f64 {
-    0.5
-}
-fn d_commit() -> f64 {
-    0.02
-}
-
-impl SoulnetVqTable {
-    /// The autoencoder this table describes.
-    pub fn autoencoder(&self) -> PartAutoencoderConfig {
-        let vq = EmaVqConfig::new(self.nb_code, self.code_dim).with_mu(self.mu);
-        let quantizer = match self.quantizer {
-            QuantizerKind::Hrvq => PartQuantizerConfig::Hrvq(
-                HierarchicalRvqConfig::new(vq)
-                    .with_num_quantizers(self.num_quantizers)
-                    .with_quantize_dropout_prob(self.quantize_dropout_prob),
-            ),
-            QuantizerKind::Rvq => PartQuantizerConfig::Rvq(
-                ResidualVqConfig::new(vq)
-                    .with_num_quantizers(self.num_quantizers)
-                    .with_quantize_dropout_prob(self.quantize_dropout_prob),
-            ),
-            QuantizerKind::Vq => PartQuantizerConfig::Vq(vq),
-        };
-        let codec = ConvCodecConfig::new(0, 0)
-            .with_width(self.width)
-            .with_depth(self.depth)
-            .with_down_t(self.down_t)
-            .with_stride_t(2)
-            .with_dilation_growth_rate(self.dilation_growth_rate)
-            .with_code_dim(self.code_dim);
-        PartAutoencoderConfig::new(PARTS, codec, quantizer)
-            .with_recon(self.recon)
-            .with_part_weights(self.part_weights)
-            .with_velocity_weight(self.velocity_weight)
-            .with_commit_weight(self.commit_weight)
+fn require_holistic(config: &TrainConfig, kind: &str) -> Result<(), String> {
+    if config.data.representation != Representation::Holistic {
+        return Err(format!(
+            "[data] representation must be \"holistic\" for {kind}"
+        ));
     }
+    Ok(())
+}
+
+fn require_music(config: &TrainConfig, kind: &str) -> Result<(), String> {
+    match &config.data.music {
+        Some(m) if m.dims == MUSIC_DIMS => Ok(()),
+        Some(m) => Err(format!(
+            "[data.music] dims = {}, {kind} reads the {MUSIC_DIMS} EDGE features",
+            m.dims
+        )),
+        None => Err(format!("[data.music] is required for {kind}")),
+    }
+}
+
+fn batch_music(batch: &Batch) -> Tensor<3> {
+    batch
+        .music
+        .clone()
+        .expect("[data.music] is required (checked when the task is built)")
 }
 
 /// See the module documentation.
 #[derive(Clone, Debug)]
 pub struct SoulnetVqTask {
-    pub table: SoulnetVqTable,
+    pub table: VqTable,
 }
 
 impl SoulnetVqTask {
     pub fn from_config(config: &TrainConfig) -> Result<Self, String> {
-        if config.data.representation != Representation::Holistic {
-            return Err("[data] representation must be \"holistic\" for soulnet_vq".into());
-        }
-        let table: SoulnetVqTable = toml::Value::Table(config.model_params())
+        require_holistic(config, KIND)?;
+        let table: VqTable = toml::Value::Table(config.model_params())
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
-        let down = 1usize << table.down_t;
+        let down = table.frames_per_token();
         if !config.data.window.is_multiple_of(down) {
             return Err(format!(
                 "[data] window {} must be a multiple of 2^down_t = {down}",
                 config.data.window
             ));
         }
-        if table.num_quantizers == 0 || table.nb_code == 0 || table.code_dim == 0 {
-            return Err("[model] num_quantizers, nb_code and code_dim must be positive".into());
-        }
+        table.validate().map_err(|r| r.replace("[vq]", "[model]"))?;
         Ok(Self { table })
     }
 }
@@ -220,4 +129,270 @@ impl TrainTask for SoulnetVqTask {
     fn model_config(&self) -> toml::Table {
         toml::Table::try_from(&self.table).expect("a serialisable table")
     }
+}
+
+/// `soulnet_mmr`.
+#[derive(Clone, Debug)]
+pub struct SoulnetMmrTask {
+    pub table: MmrTable,
+}
+
+impl SoulnetMmrTask {
+    pub fn from_config(config: &TrainConfig) -> Result<Self, String> {
+        require_holistic(config, MMR)?;
+        require_music(config, MMR)?;
+        let table: MmrTable = toml::Value::Table(config.model_params())
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
+        table
+            .validate()
+            .map_err(|r| r.replace("[mmr]", "[model]"))?;
+        Ok(Self { table })
+    }
+}
+
+impl TrainTask for SoulnetMmrTask {
+    type Model = MusicMotionRetrieval;
+
+    fn kind(&self) -> &'static str {
+        MMR
+    }
+
+    fn init(&self, device: &Device) -> MusicMotionRetrieval {
+        self.table.retrieval().init(device)
+    }
+
+    fn loss(&self, model: &MusicMotionRetrieval, batch: &Batch) -> Losses {
+        let l = model.loss(batch.motion.clone(), batch_music(batch));
+        Losses {
+            total: l.clone(),
+            parts: vec![("info_nce", l)],
+        }
+    }
+
+    fn model_config(&self) -> toml::Table {
+        toml::Table::try_from(&self.table).expect("a serialisable table")
+    }
+}
+
+/// `[model]` of `soulnet_magm`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MagmTable {
+    /// The finished `soulnet_vq` run (relative to the config file).
+    pub vq: PathBuf,
+    /// The finished `soulnet_mmr` run.
+    pub mmr: PathBuf,
+    #[serde(default)]
+    pub generator: GeneratorTable,
+    /// Filled from the runs (written to the run's `model.toml` for the bundle).
+    #[serde(default, skip_deserializing)]
+    pub vq_table: Option<VqTable>,
+    #[serde(default, skip_deserializing)]
+    pub mmr_table: Option<MmrTable>,
+}
+
+/// A finished run's `[config]` table and weights, loaded onto `device`.
+fn load_run<T: for<'de> Deserialize<'de>, M>(
+    run: &Path,
+    kind: &str,
+    init: impl Fn(&T) -> M,
+) -> Result<(T, M), String>
+where
+    M: dancegen_nn::burn::module::Module + dancegen_nn::burn::store::ModuleSnapshot,
+{
+    let table: T =
+        super::bundle_files::finished_run_config(run, kind).map_err(|e| e.to_string())?;
+    let model = weights::load(init(&table), &run.join(files::WEIGHTS), Layout::Burn)
+        .map_err(|e| format!("{}: {e}", run.join(files::WEIGHTS).display()))?;
+    Ok((table, model))
+}
+
+/// `soulnet_magm`.
+pub struct SoulnetMagmTask {
+    pub table: MagmTable,
+    vq: PartAutoencoder,
+    mmr: MusicMotionRetrieval,
+}
+
+impl SoulnetMagmTask {
+    pub fn from_config(config: &TrainConfig, path: &Path) -> Result<Self, String> {
+        require_holistic(config, MAGM)?;
+        require_music(config, MAGM)?;
+        let mut table: MagmTable = toml::Value::Table(config.model_params())
+            .try_into()
+            .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        for p in [&mut table.vq, &mut table.mmr] {
+            if p.is_relative() {
+                *p = base.join(&*p);
+            }
+        }
+        table
+            .generator
+            .validate()
+            .map_err(|r| r.replace("[generator]", "[model.generator]"))?;
+        let dev = device::inference();
+        let (vq_table, vq) = load_run(&table.vq, KIND, |t: &VqTable| t.autoencoder().init(&dev))?;
+        let (mmr_table, mmr) = load_run(&table.mmr, MMR, |t: &MmrTable| t.retrieval().init(&dev))?;
+        let window = table.generator.window_tokens * vq_table.frames_per_token();
+        if config.data.window != window {
+            return Err(format!(
+                "[data] window {} must be generator.window_tokens × 2^down_t = {window}",
+                config.data.window
+            ));
+        }
+        table.vq_table = Some(vq_table);
+        table.mmr_table = Some(mmr_table);
+        Ok(Self { table, vq, mmr })
+    }
+
+    fn vq_table(&self) -> &VqTable {
+        self.table.vq_table.as_ref().expect("set in from_config")
+    }
+}
+
+impl TrainTask for SoulnetMagmTask {
+    type Model = PartGenerator;
+
+    fn kind(&self) -> &'static str {
+        MAGM
+    }
+
+    fn init(&self, device: &Device) -> PartGenerator {
+        let vq = self.vq_table();
+        let d = self.table.mmr_table.as_ref().expect("set").latent_dim;
+        PartGenerator {
+            masked: self.table.generator.masked(vq, d).init(device),
+            residual: self.table.generator.residual(vq, d).map(|c| c.init(device)),
+        }
+    }
+
+    fn loss(&self, model: &PartGenerator, batch: &Batch) -> Losses {
+        let device = batch.motion.device();
+        let inf = device::inference();
+        // The frozen networks run on the inference device; only their outputs cross over.
+        let motion = Tensor::<3>::from_data(batch.motion.clone().into_data(), &inf);
+        let idx = self.vq.encode(motion);
+        let dims = idx.dims();
+        let ids: Vec<i64> = idx
+            .into_data()
+            .convert::<i64>()
+            .try_into_vec::<i64>()
+            .expect("int indices");
+        let music = batch_music(batch);
+        let music_inf = Tensor::<3>::from_data(music.clone().into_data(), &inf);
+        let clip = self.mmr.music.forward(music_inf, None).into_data();
+        let fpt = self.vq_table().frames_per_token();
+        let cond = Condition {
+            clip: Tensor::<2>::from_data(clip, &device),
+            frames: (self.table.generator.d_frame(fpt) > 0).then(|| music_tokens(music, fpt)),
+        };
+        let l = model.loss(
+            &ids,
+            dims,
+            cond,
+            self.table.generator.cond_drop_prob,
+            batch.seed,
+            &device,
+        );
+        Losses {
+            total: l.total,
+            parts: vec![("masked_ce", l.masked), ("residual_ce", l.residual)],
+        }
+    }
+
+    fn model_config(&self) -> toml::Table {
+        toml::Table::try_from(&self.table).expect("a serialisable table")
+    }
+}
+
+/// The holistic model directory from the three finished runs.
+pub fn assemble_holistic_bundle(
+    vq_run: &Path,
+    mmr_run: &Path,
+    generator_run: &Path,
+    out: &Path,
+    name: &str,
+) -> Result<(), crate::TrainError> {
+    use dancegen_soulnet::bundle::{BundleConfig, KIND as BUNDLE_KIND, files as bundle_files};
+    use dancegen_soulnet::config::SamplingDefaults;
+
+    let err = |p: &Path, reason: String| crate::TrainError::Config {
+        path: p.to_path_buf(),
+        reason,
+    };
+    let magm: MagmTable = super::bundle_files::finished_run_config(generator_run, MAGM)?;
+    let dev = device::inference();
+    let (vq_table, vq) = load_run(vq_run, KIND, |t: &VqTable| t.autoencoder().init(&dev))
+        .map_err(|r| err(vq_run, r))?;
+    let (mmr_table, mmr) = load_run(mmr_run, MMR, |t: &MmrTable| t.retrieval().init(&dev))
+        .map_err(|r| err(mmr_run, r))?;
+    if magm.vq_table.as_ref() != Some(&vq_table) || magm.mmr_table.as_ref() != Some(&mmr_table) {
+        return Err(err(
+            generator_run,
+            format!(
+                "the generator run was trained on another autoencoder or MMR configuration than {} and {}",
+                vq_run.display(),
+                mmr_run.display()
+            ),
+        ));
+    }
+    let config = BundleConfig {
+        kind: BUNDLE_KIND.into(),
+        name: name.into(),
+        fps: 30.0,
+        vq: vq_table,
+        mmr: mmr_table,
+        generator: magm.generator,
+        sampling: SamplingDefaults::default(),
+    };
+    let generator = weights::load(
+        config.init_generator(&dev),
+        &generator_run.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(|e| err(generator_run, e.to_string()))?;
+    // Every network saw the data through one normaliser (the same data set gives the same
+    // statistics); a run on other data would silently shift the inputs.
+    let norm = |run: &Path| std::fs::read(run.join(files::NORMALIZER)).ok();
+    for run in [mmr_run, generator_run] {
+        if norm(run) != norm(vq_run) {
+            return Err(err(
+                &run.join(files::NORMALIZER),
+                format!(
+                    "differs from {}: the runs were trained on different data",
+                    vq_run.join(files::NORMALIZER).display()
+                ),
+            ));
+        }
+    }
+    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
+    let f16 = weights::Storage::F16;
+    for (file, result) in [
+        (
+            bundle_files::VQ,
+            save(&vq, &out.join(bundle_files::VQ), f16),
+        ),
+        (
+            bundle_files::MMR,
+            save(&mmr, &out.join(bundle_files::MMR), f16),
+        ),
+        (
+            bundle_files::GENERATOR,
+            save(&generator, &out.join(bundle_files::GENERATOR), f16),
+        ),
+    ] {
+        result.map_err(|e| err(&out.join(file), e))?;
+    }
+    // The autoencoder's normaliser is the one every network saw.
+    super::bundle_files::copy_normalizer(vq_run, &out.join(bundle_files::NORMALIZER))?;
+    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
+}
+
+fn save<M>(m: &M, p: &Path, storage: weights::Storage) -> Result<(), String>
+where
+    M: dancegen_nn::burn::module::Module + dancegen_nn::burn::store::ModuleSnapshot,
+{
+    weights::save_as(m, p, Layout::Burn, &[], storage).map_err(|e| e.to_string())
 }

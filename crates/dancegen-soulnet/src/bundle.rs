@@ -1,0 +1,192 @@
+//! A trained holistic model on disk: `dancegen bundle --holistic` writes it from the three
+//! training runs (part autoencoder, MMR, generator).
+//!
+//! ```text
+//! model.toml                kind = "soulnet", name, fps, [vq] [mmr] [generator] [sampling]
+//! vq.safetensors            the part autoencoder (HRVQ-VAE)
+//! mmr.safetensors           the music and motion encoders
+//! generator.safetensors     masked + residual transformers
+//! normalizer.json           mean/std of the 675 training values
+//! MODEL_CARD.md
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use dancegen_nn::burn::tensor::Device;
+use dancegen_nn::part_autoencoder::PartAutoencoder;
+use dancegen_nn::retrieval::MusicMotionRetrieval;
+use dancegen_nn::weights::{self, Layout};
+use serde::{Deserialize, Serialize};
+
+use crate::config::{GeneratorTable, MmrTable, SamplingDefaults, VqTable};
+use crate::generator::PartGenerator;
+use crate::layout::TOTAL_DIMS;
+
+/// `model.toml`'s `kind`.
+pub const KIND: &str = "soulnet";
+
+/// File names inside a bundle.
+pub mod files {
+    pub const MODEL_TOML: &str = "model.toml";
+    pub const VQ: &str = "vq.safetensors";
+    pub const MMR: &str = "mmr.safetensors";
+    pub const GENERATOR: &str = "generator.safetensors";
+    pub const NORMALIZER: &str = "normalizer.json";
+    pub const CARD: &str = "MODEL_CARD.md";
+}
+
+/// `model.toml`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BundleConfig {
+    pub kind: String,
+    pub name: String,
+    pub fps: f64,
+    pub vq: VqTable,
+    pub mmr: MmrTable,
+    pub generator: GeneratorTable,
+    #[serde(default)]
+    pub sampling: SamplingDefaults,
+}
+
+impl BundleConfig {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.kind != KIND {
+            return Err(format!(
+                "kind {:?} is not a holistic model ({KIND:?})",
+                self.kind
+            ));
+        }
+        self.vq.validate()?;
+        self.mmr.validate()?;
+        self.generator.validate()?;
+        let s = &self.sampling;
+        if s.overlap_tokens >= self.generator.window_tokens {
+            return Err(format!(
+                "[sampling] overlap_tokens {} must be below [generator] window_tokens {}",
+                s.overlap_tokens, self.generator.window_tokens
+            ));
+        }
+        if s.steps == 0 {
+            return Err("[sampling] steps must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    /// The generator's networks (MMR latent as the clip condition).
+    pub fn init_generator(&self, device: &Device) -> PartGenerator {
+        let d = self.mmr.latent_dim;
+        PartGenerator {
+            masked: self.generator.masked(&self.vq, d).init(device),
+            residual: self.generator.residual(&self.vq, d).map(|c| c.init(device)),
+        }
+    }
+}
+
+/// `normalizer.json` as `dancegen train` writes it (`kind = "mean_std"`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MeanStd {
+    pub kind: String,
+    pub mean: Vec<f64>,
+    pub std: Vec<f64>,
+}
+
+/// What can go wrong reading a bundle (always names the file).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {reason}", path.display())]
+pub struct BundleError {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+fn invalid(path: &Path, reason: impl ToString) -> BundleError {
+    BundleError {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+impl MeanStd {
+    pub fn load(path: &Path) -> Result<Self, BundleError> {
+        let text = std::fs::read_to_string(path).map_err(|e| invalid(path, e))?;
+        let m: MeanStd = serde_json::from_str(&text)
+            .map_err(|e| invalid(path, format!("not a normaliser: {e}")))?;
+        if m.kind != "mean_std" || m.mean.len() != TOTAL_DIMS || m.std.len() != TOTAL_DIMS {
+            return Err(invalid(
+                path,
+                format!(
+                    "expected a {TOTAL_DIMS}-value mean_std normaliser, got {} with {} values",
+                    m.kind,
+                    m.mean.len()
+                ),
+            ));
+        }
+        Ok(m)
+    }
+
+    /// Normalised → data units, in place.
+    pub fn inverse(&self, x: &mut [f32]) {
+        let d = self.mean.len();
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = (f64::from(*v) * self.std[i % d] + self.mean[i % d]) as f32;
+        }
+    }
+
+    /// Data units → normalised, in place.
+    pub fn transform(&self, x: &mut [f32]) {
+        let d = self.mean.len();
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = ((f64::from(*v) - self.mean[i % d]) / self.std[i % d]) as f32;
+        }
+    }
+}
+
+/// A loaded holistic model.
+pub struct HolisticModel {
+    pub dir: PathBuf,
+    pub config: BundleConfig,
+    pub vq: PartAutoencoder,
+    pub mmr: MusicMotionRetrieval,
+    pub generator: PartGenerator,
+    pub norm: MeanStd,
+}
+
+impl HolisticModel {
+    /// Reads the bundle in `dir` onto `device` (a plain inference device).
+    pub fn load(dir: &Path, device: &Device) -> Result<Self, BundleError> {
+        let p = dir.join(files::MODEL_TOML);
+        let text = std::fs::read_to_string(&p)
+            .map_err(|e| invalid(&p, format!("{e} (is it a model directory?)")))?;
+        let config: BundleConfig = toml::from_str(&text).map_err(|e| invalid(&p, e.message()))?;
+        config.validate().map_err(|r| invalid(&p, r))?;
+        let need = |name: &str| -> Result<PathBuf, BundleError> {
+            let f = dir.join(name);
+            if f.is_file() {
+                Ok(f)
+            } else {
+                Err(invalid(
+                    &f,
+                    "missing model file (is the model directory complete?)",
+                ))
+            }
+        };
+        let vp = need(files::VQ)?;
+        let vq = weights::load(config.vq.autoencoder().init(device), &vp, Layout::Burn)
+            .map_err(|e| invalid(&vp, e))?;
+        let mp = need(files::MMR)?;
+        let mmr = weights::load(config.mmr.retrieval().init(device), &mp, Layout::Burn)
+            .map_err(|e| invalid(&mp, e))?;
+        let gp = need(files::GENERATOR)?;
+        let generator = weights::load(config.init_generator(device), &gp, Layout::Burn)
+            .map_err(|e| invalid(&gp, e))?;
+        let norm = MeanStd::load(&need(files::NORMALIZER)?)?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            config,
+            vq,
+            mmr,
+            generator,
+            norm,
+        })
+    }
+}

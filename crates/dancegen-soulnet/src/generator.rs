@@ -1,0 +1,105 @@
+//! The music-aligned generator (SoulNet's MAGM, holistic.md §1.3): a masked transformer over the
+//! base tokens of the three parts and a residual transformer for the higher levels, both
+//! conditioned on the window's MMR music embedding (prefix token) and, by default, the music
+//! features of each token's frames (`dancegen_nn::masked` explains why).
+
+use dancegen_nn::burn;
+
+use burn::module::Module;
+use burn::tensor::{Device, Int, Tensor, TensorData};
+use dancegen_nn::loss::masked_cross_entropy;
+use dancegen_nn::masked::{MaskedTransformer, corrupt};
+use dancegen_nn::residual_transformer::ResidualTransformer;
+use dancegen_nn::rng::SplitMix64;
+
+/// See the module documentation.
+#[derive(Module, Debug)]
+pub struct PartGenerator {
+    pub masked: MaskedTransformer,
+    /// Absent for a one-level quantizer.
+    pub residual: Option<ResidualTransformer>,
+}
+
+/// The condition of a batch of windows.
+#[derive(Clone, Debug)]
+pub struct Condition {
+    /// `[B, d_cond]` MMR music embedding.
+    pub clip: Tensor<2>,
+    /// `[B, T', frames_per_token · 35]`, when the generator hears the frames.
+    pub frames: Option<Tensor<3>>,
+}
+
+impl Condition {
+    /// Rows whose `keep` is false lose their music (classifier-free guidance training).
+    pub fn dropped(self, keep: &[bool]) -> Self {
+        let device = self.clip.device();
+        let b = keep.len();
+        let k: Vec<f32> = keep.iter().map(|&k| f32::from(u8::from(k))).collect();
+        let k = Tensor::<1>::from_data(TensorData::new(k, [b]), &device);
+        Condition {
+            clip: self.clip * k.clone().reshape([b, 1]),
+            frames: self.frames.map(|f| f * k.reshape([b, 1, 1])),
+        }
+    }
+}
+
+/// The music of `[B, T'·fpt, 35]` frames as `[B, T', fpt·35]` per-token features.
+pub fn music_tokens(music: Tensor<3>, frames_per_token: usize) -> Tensor<3> {
+    let [b, f, d] = music.dims();
+    music.reshape([b, f / frames_per_token, frames_per_token * d])
+}
+
+/// The losses of one batch.
+pub struct GeneratorLoss {
+    pub total: Tensor<1>,
+    pub masked: Tensor<1>,
+    /// Zero for a one-level quantizer.
+    pub residual: Tensor<1>,
+}
+
+impl PartGenerator {
+    /// Loss on ground-truth `indices` `[B, 3T', Q]` (host ids, from the frozen autoencoder):
+    /// MoMask's corruption and cross-entropy on the base level, and the cross-entropy of one
+    /// residual level drawn per batch. `seed` drives the corruption, the level and the
+    /// condition dropout (so a resumed run repeats them).
+    pub fn loss(
+        &self,
+        indices: &[i64],
+        [b, l, q]: [usize; 3],
+        cond: Condition,
+        cond_drop_prob: f64,
+        seed: u64,
+        device: &Device,
+    ) -> GeneratorLoss {
+        let mut rng = SplitMix64(seed);
+        let keep: Vec<bool> = (0..b).map(|_| rng.next_f64() >= cond_drop_prob).collect();
+        let cond = cond.dropped(&keep);
+        let base: Vec<i64> = (0..b * l).map(|p| indices[p * q]).collect();
+        let c = corrupt(&base, l, self.masked.vocab, &mut rng);
+        let input = Tensor::<2, Int>::from_data(TensorData::new(c.input, [b, l]), device);
+        let target = Tensor::<2, Int>::from_data(TensorData::new(base, [b, l]), device);
+        let weight = Tensor::<2>::from_data(TensorData::new(c.weight, [b, l]), device);
+        let logits = self
+            .masked
+            .forward_with(input, cond.clip.clone(), cond.frames.clone());
+        let masked = masked_cross_entropy(logits, target, weight);
+        let residual = match &self.residual {
+            Some(r) => {
+                let level = 1 + (rng.next_f64() * (q - 1) as f64) as usize % (q - 1);
+                let all = Tensor::<3, Int>::from_data(
+                    TensorData::new(indices.to_vec(), [b, l, q]),
+                    device,
+                );
+                let target = all.clone().narrow(2, level, 1).reshape([b, l]);
+                let logits = r.forward(all, level, cond.clip, cond.frames);
+                masked_cross_entropy(logits, target, Tensor::ones([b, l], device))
+            }
+            None => Tensor::zeros([1], device),
+        };
+        GeneratorLoss {
+            total: masked.clone() + residual.clone(),
+            masked,
+            residual,
+        }
+    }
+}
