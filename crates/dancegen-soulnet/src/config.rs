@@ -361,6 +361,15 @@ impl Default for SamplingDefaults {
 }
 
 impl SamplingDefaults {
+    /// The defaults for a generator of `window_tokens` tokens per part: a quarter of the window
+    /// is carried over between windows (8 of 32).
+    pub fn for_window(window_tokens: usize) -> Self {
+        Self {
+            overlap_tokens: (window_tokens / 4).max(1),
+            ..Self::default()
+        }
+    }
+
     pub fn masked(&self, seed: u64) -> MaskedSampling {
         MaskedSampling {
             steps: self.steps,

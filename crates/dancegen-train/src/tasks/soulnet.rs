@@ -185,10 +185,12 @@ pub struct MagmTable {
     pub mmr: PathBuf,
     #[serde(default)]
     pub generator: GeneratorTable,
-    /// Filled from the runs (written to the run's `model.toml` for the bundle).
-    #[serde(default, skip_deserializing)]
+    /// Filled from the two runs when the task is built (whatever a config says here is
+    /// replaced), so the run's `model.toml` records what the generator was trained on and the
+    /// bundle can check it.
+    #[serde(default)]
     pub vq_table: Option<VqTable>,
-    #[serde(default, skip_deserializing)]
+    #[serde(default)]
     pub mmr_table: Option<MmrTable>,
 }
 
@@ -344,8 +346,8 @@ pub fn assemble_holistic_bundle(
         fps: 30.0,
         vq: vq_table,
         mmr: mmr_table,
+        sampling: SamplingDefaults::for_window(magm.generator.window_tokens),
         generator: magm.generator,
-        sampling: SamplingDefaults::default(),
     };
     let generator = weights::load(
         config.init_generator(&dev),

@@ -1,0 +1,171 @@
+//! The holistic system end to end at toy size: the three runs (`soulnet_vq`, `soulnet_mmr`,
+//! `soulnet_magm`) train on a real AIST++ body with hands, face and music, `dancegen bundle`'s
+//! assembler joins them, and the loaded model dances to music longer than one window (so the
+//! windows are joined by inpainting). Training quality is not tested here (a few steps); shapes,
+//! files, the join and the errors are.
+
+mod common;
+
+use std::path::Path;
+
+use dancegen_io::NpyData;
+use dancegen_nn::device;
+use dancegen_nn::progress::NoHook;
+use dancegen_soulnet::bundle::HolisticModel;
+use dancegen_soulnet::pipeline::{GenerateOptions, generate};
+use dancegen_train::tasks::soulnet::assemble_holistic_bundle;
+use dancegen_train::{RunOptions, TrainConfig};
+
+/// AIST++ sequence frames at 30 fps.
+const FRAMES: usize = 288;
+
+fn write_inputs(dir: &Path) {
+    let stem = common::aist_motion().file_stem().unwrap().to_owned();
+    let hol = dir.join("holistic");
+    let music = dir.join("music");
+    std::fs::create_dir_all(&hol).unwrap();
+    std::fs::create_dir_all(&music).unwrap();
+    let hands: Vec<f32> = (0..FRAMES * 90)
+        .map(|i| 0.3 * ((i as f32) * 0.01).sin())
+        .collect();
+    let face: Vec<f32> = (0..FRAMES * 52)
+        .map(|i| 0.5 + 0.4 * ((i as f32) * 0.03).sin())
+        .collect();
+    dancegen_io::write_npz(
+        &hol.join(&stem).with_extension("npz"),
+        &[
+            ("hands", &[FRAMES, 30, 3], NpyData::F32(&hands)),
+            ("face", &[FRAMES, 52], NpyData::F32(&face)),
+        ],
+    )
+    .unwrap();
+    let feats: Vec<f32> = (0..FRAMES * 35)
+        .map(|i| ((i % 35) as f32 * 0.1 + (i / 35) as f32 * 0.05).sin())
+        .collect();
+    dancegen_io::write_npy_f32(
+        &music.join(&stem).with_extension("npy"),
+        &[FRAMES, 35],
+        &feats,
+    )
+    .unwrap();
+}
+
+fn config(dir: &Path, run: &str, window: usize, model: &str) -> (TrainConfig, std::path::PathBuf) {
+    let text = format!(
+        r#"
+[run]
+dir = "{run}"
+seed = 3
+steps = 3
+checkpoint_every = 3
+log_every = 1
+
+[data]
+paths = ["{motion}"]
+holistic = "holistic"
+representation = "holistic"
+window = {window}
+stride = 16
+batch_size = 4
+normalizer = "mean_std"
+
+[data.music]
+dir = "music"
+dims = 35
+
+{model}
+
+[optimizer]
+kind = "adamw"
+lr = 1e-3
+"#,
+        motion = common::aist_motion().display(),
+    );
+    let c = TrainConfig::parse(&text, dir).unwrap();
+    let path = dir.join(format!("{run}.toml"));
+    (c, path)
+}
+
+fn train(dir: &Path, run: &str, window: usize, model: &str) {
+    let (c, path) = config(dir, run, window, model);
+    let opts = RunOptions {
+        quiet: true,
+        stop_at: None,
+    };
+    dancegen_train::tasks::train_config(&c, &path, &opts).unwrap_or_else(|e| panic!("{run}: {e}"));
+}
+
+#[test]
+fn three_runs_make_a_model_that_dances_longer_than_one_window() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    write_inputs(dir);
+    train(
+        dir,
+        "vq",
+        32,
+        "[model]\nkind = \"soulnet_vq\"\nnum_quantizers = 3\nnb_code = 16\ncode_dim = 8\nwidth = 16\ndepth = 1",
+    );
+    train(
+        dir,
+        "mmr",
+        32,
+        "[model]\nkind = \"soulnet_mmr\"\nd_model = 16\nn_layers = 1\nn_heads = 2\nd_ff = 32\nlatent_dim = 8",
+    );
+    // The generator's window must be window_tokens × 4 frames: say so when it is not.
+    let gen_model = "[model]\nkind = \"soulnet_magm\"\nvq = \"vq\"\nmmr = \"mmr\"\n\n[model.generator]\nd_model = 16\nn_layers = 1\nn_heads = 2\nd_ff = 32\nresidual_layers = 1\nwindow_tokens = 8";
+    let (c, path) = config(dir, "gen", 40, gen_model);
+    let e = dancegen_train::tasks::train_config(
+        &c,
+        &path,
+        &RunOptions {
+            quiet: true,
+            stop_at: None,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("window") && e.contains("32"), "{e}");
+    train(dir, "gen", 32, gen_model);
+    let log = std::fs::read_to_string(dir.join("gen/log.csv")).unwrap();
+    assert!(
+        log.lines()
+            .next()
+            .unwrap()
+            .contains("masked_ce,residual_ce"),
+        "{log}"
+    );
+
+    let out = dir.join("model");
+    assemble_holistic_bundle(
+        &dir.join("vq"),
+        &dir.join("mmr"),
+        &dir.join("gen"),
+        &out,
+        "toy",
+    )
+    .unwrap();
+    let dev = device::inference();
+    let model = HolisticModel::load(&out, &dev).unwrap();
+    // 100 frames = 25 tokens per part: windows of 8 tokens overlapping by the default 8 → the
+    // overlap is capped below the window, so several windows.
+    let mut opts = GenerateOptions::defaults(&model, 7);
+    opts.sampling.overlap_tokens = 2;
+    opts.sampling.steps = 3;
+    let music: Vec<f32> = (0..100 * 35).map(|i| (i as f32 * 0.013).cos()).collect();
+    let made = generate(&model, &music, &opts, &dev, &NoHook).unwrap();
+    assert_eq!(made.frames, 100);
+    assert_eq!(made.rows.len(), 100 * 675);
+    assert!(made.windows >= 4, "{} windows", made.windows);
+    assert_eq!(made.joins.len(), made.windows - 1);
+    let again = generate(&model, &music, &opts, &dev, &NoHook).unwrap();
+    assert_eq!(made.rows, again.rows, "same seed, same dance");
+    let d = dancegen_soulnet::layout::decode(&made.rows, 30.0).unwrap();
+    assert_eq!(d.motion.poses.len(), 100 * 52 * 3);
+    assert!(d.face.iter().all(|v| (0.0..=1.0).contains(v)));
+
+    // A model directory missing a file names it.
+    std::fs::remove_file(out.join("mmr.safetensors")).unwrap();
+    let e = HolisticModel::load(&out, &dev).err().unwrap().to_string();
+    assert!(e.contains("mmr.safetensors"), "{e}");
+}
