@@ -122,7 +122,9 @@ pub struct GenerateArgs {
     #[arg(long, value_enum, default_value_t = ProgressArg::Bar)]
     pub progress: ProgressArg,
     /// Output file, by extension: .glb .fbx .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres,
-    /// Y-up, 30 fps) .json .gif .mp4 (preview with the song). Repeatable. Default: dance.glb.
+    /// Y-up, 30 fps) .json .gif .mp4 (preview with the song) .csv (the face as Live Link Face
+    /// ARKit weights; --system holistic only, whose .glb .fbx .bvh .npz .npy .json also hold
+    /// the fingers: 52 SMPL-H joints). Repeatable. Default: dance.glb.
     #[arg(short, long, value_name = "FILE")]
     pub output: Vec<PathBuf>,
     /// Bone names of .bvh, .fbx and .glb: smpl, mixamo (mixamorig:Hips, ...), ue5 (pelvis,
@@ -167,6 +169,11 @@ pub struct GenerateArgs {
     /// Group: every dancer dances the same moves (the leftmost dancer's), each on its own path.
     #[arg(long)]
     pub unison: bool,
+    /// Holistic: a (52, 103) ARKit -> FLAME matrix (.npy, yours: FLAME and SoulNet's mapping
+    /// are not redistributable); the .json then also holds the face as FLAME's 100 expression
+    /// and 3 jaw values per frame ("flame").
+    #[arg(long, value_name = "MAPPING.npy")]
+    pub flame_mapping: Option<PathBuf>,
     /// Duet: guidance s of the coarse (base) HFSQ level, x̂0 = (1 + s)·cond − s·uncond
     /// (default: the model's).
     #[arg(long, requires = "leader")]

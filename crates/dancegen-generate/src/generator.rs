@@ -17,6 +17,7 @@ use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer};
 use crate::systems::duet::Duet;
 use crate::systems::group::Group;
+use crate::systems::holistic::Holistic;
 use crate::systems::solo::Solo;
 
 /// Where a job's time went (seconds).
@@ -93,6 +94,9 @@ impl Generator {
             SystemRequest::Solo(o) => self.run_system::<Solo>(request, o, on_progress, cancel),
             SystemRequest::Duet(o) => self.run_system::<Duet>(request, o, on_progress, cancel),
             SystemRequest::Group(o) => self.run_system::<Group>(request, o, on_progress, cancel),
+            SystemRequest::Holistic(o) => {
+                self.run_system::<Holistic>(request, o, on_progress, cancel)
+            }
         }
     }
 
@@ -137,7 +141,7 @@ impl Generator {
         cancel: &CancelToken,
     ) -> Result<Generated, GenerateError> {
         let started = Instant::now();
-        let planned = output::plan(&request.outputs)?;
+        let planned = output::plan(&request.outputs, request.system.makes_face())?;
         let model_dir = match &request.model {
             Some(d) => d.clone(),
             None => self.locator.find(S::DEFAULT_MODEL, S::NAME)?,

@@ -1,11 +1,12 @@
 //! Every output format a dance can be written to, chosen by extension, and the staging that
 //! makes a job's outputs appear all together or not at all.
 //!
-//! Motion files go through `dancegen_motion::formats::save_motion_file`; previews are drawn
-//! by `dancegen_render` (MP4 with the danced part of the song as its sound track). Every file
-//! is first written into a hidden staging folder next to its destination and renamed into
-//! place only after all of them are complete, so a failed or cancelled job leaves no file
-//! and never replaces an existing one with half a dance.
+//! Motion files go through `dancegen_motion::formats::save_motion_file`, a holistic dance's
+//! (body, fingers and face; `.csv` is its face) through the `holistic` module; previews are
+//! drawn by `dancegen_render` (MP4 with the danced part of the song as its sound track). Every
+//! file is first written into a hidden staging folder next to its destination and renamed into
+//! place only after all of them are complete, so a failed or cancelled job leaves no file and
+//! never replaces an existing one with half a dance.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -22,6 +23,8 @@ use crate::request::{DancerSelection, OutputRequest};
 use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, GroupReport};
 
+mod holistic;
+
 /// Preview image size.
 pub const PREVIEW_WIDTH: u32 = 640;
 pub const PREVIEW_HEIGHT: u32 = 480;
@@ -36,19 +39,22 @@ pub enum OutputFormat {
     /// FBX 7.4 binary: the same scene as `.glb` (Maya, MotionBuilder, Unity, Unreal, Blender).
     Fbx,
     Bvh,
-    /// SMPL parameters (AMASS-style npz).
+    /// SMPL parameters (AMASS-style npz; SMPL-H `(T, 156)` for a holistic dance).
     Npz,
-    /// World joints `(T, 24, 3)`, metres, Y-up, 30 fps.
+    /// World joints `(T, 24, 3)`, metres, Y-up, 30 fps (`(T, 52, 3)` SMPL-H for a holistic
+    /// dance).
     Npy,
-    /// Joint names, parents and world positions.
+    /// Joint names, parents and world positions (and a holistic dance's face).
     Json,
     Gif,
     /// Preview with the song.
     Mp4,
+    /// The face as Live Link Face CSV (52 ARKit weights per frame); holistic dances only.
+    Csv,
 }
 
 impl OutputFormat {
-    pub const ALL: [OutputFormat; 8] = [
+    pub const ALL: [OutputFormat; 9] = [
         OutputFormat::Glb,
         OutputFormat::Fbx,
         OutputFormat::Bvh,
@@ -57,6 +63,7 @@ impl OutputFormat {
         OutputFormat::Json,
         OutputFormat::Gif,
         OutputFormat::Mp4,
+        OutputFormat::Csv,
     ];
 
     pub fn extension(self) -> &'static str {
@@ -69,6 +76,7 @@ impl OutputFormat {
             OutputFormat::Json => "json",
             OutputFormat::Gif => "gif",
             OutputFormat::Mp4 => "mp4",
+            OutputFormat::Csv => "csv",
         }
     }
 
@@ -86,7 +94,7 @@ impl OutputFormat {
                 path: path.to_path_buf(),
                 reason: format!(
                     "unknown output format '.{ext}' (use .glb, .fbx, .bvh, .npz, .npy, .json, \
-                     .gif or .mp4)"
+                     .gif, .mp4 or, for a holistic dance's face, .csv)"
                 ),
             })
     }
@@ -115,12 +123,18 @@ pub(crate) struct PlannedOutput {
 }
 
 /// Checks every output before any work is done: known format, an existing folder, no file
-/// named twice, ffmpeg present for MP4.
-pub(crate) fn plan(outputs: &[OutputRequest]) -> Result<Vec<PlannedOutput>, GenerateError> {
+/// named twice, ffmpeg present for MP4, a face for `.csv` (`with_face`: the system makes one).
+pub(crate) fn plan(
+    outputs: &[OutputRequest],
+    with_face: bool,
+) -> Result<Vec<PlannedOutput>, GenerateError> {
     let mut seen = HashSet::new();
     let mut planned = Vec::with_capacity(outputs.len());
     for r in outputs {
         let format = OutputFormat::of(&r.path)?;
+        if format == OutputFormat::Csv && !with_face {
+            return Err(no_face(&r.path));
+        }
         let dir = parent_dir(&r.path);
         if !dir.is_dir() {
             return Err(GenerateError::Output {
@@ -153,6 +167,16 @@ pub(crate) fn estimated_seconds(planned: &[PlannedOutput]) -> f64 {
         .iter()
         .map(|p| if p.format.is_preview() { 4.0 } else { 0.1 })
         .sum()
+}
+
+/// A `.csv` asked of a dance without a face.
+fn no_face(path: &Path) -> GenerateError {
+    GenerateError::Output {
+        path: path.to_path_buf(),
+        reason: "a .csv holds the face (Live Link Face ARKit weights) of a holistic dance \
+                 (--system holistic), and this dance has no face"
+            .into(),
+    }
 }
 
 /// Progress units of one motion file (a preview counts its frames).
@@ -275,6 +299,12 @@ pub(crate) fn write_all(
     song: &AnalysedSong,
     tracker: &Tracker<'_>,
 ) -> Result<Vec<PathBuf>, GenerateError> {
+    // Before any file is written: only a holistic dance has a face for `.csv`.
+    if dance.holistic.is_none()
+        && let Some(p) = planned.iter().find(|p| p.format == OutputFormat::Csv)
+    {
+        return Err(no_face(&p.request.path));
+    }
     let fps = FPS as f32;
     let units: Vec<usize> = planned
         .iter()
@@ -317,6 +347,14 @@ pub(crate) fn write_all(
         let motion = select(dance, p.request.dancers, p.format, dest)?;
         if let (OutputFormat::Glb, Some(character)) = (p.format, &p.request.character) {
             write_character(&tmp, dest, character, &motion)?;
+            done += n;
+            tracker.advance(stage::WRITE_OUTPUTS, done, total);
+            continue;
+        }
+        if let Some(parts) = &dance.holistic
+            && !p.format.is_preview()
+        {
+            holistic::write(&tmp, dest, p.format, p.request.rig, parts, &motion)?;
             done += n;
             tracker.advance(stage::WRITE_OUTPUTS, done, total);
             continue;

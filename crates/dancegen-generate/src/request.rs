@@ -8,6 +8,7 @@ pub use dancegen_motion::rig::Rig;
 
 use crate::systems::duet::DuetOptions;
 use crate::systems::group::GroupOptions;
+use crate::systems::holistic::HolisticOptions;
 use crate::systems::solo::SoloOptions;
 
 /// Where the song comes from.
@@ -45,6 +46,19 @@ pub enum SystemRequest {
     Duet(DuetOptions),
     /// 2–5 dancers together (TCDiff++).
     Group(GroupOptions),
+    /// One dancer with fingers and face (SoulNet).
+    Holistic(HolisticOptions),
+}
+
+impl SystemRequest {
+    /// Whether the system's dances have a face (a holistic dance), so a `.csv` output can be
+    /// checked before any work is done.
+    pub fn makes_face(&self) -> bool {
+        match self {
+            SystemRequest::Solo(_) | SystemRequest::Duet(_) | SystemRequest::Group(_) => false,
+            SystemRequest::Holistic(_) => true,
+        }
+    }
 }
 
 /// Options every system understands; `None` means the model's default.

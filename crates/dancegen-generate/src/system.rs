@@ -53,6 +53,27 @@ pub struct Dance {
     pub notes: Vec<String>,
     /// Group dances: where the dancers went (written to `.json`).
     pub group: Option<GroupReport>,
+    /// Holistic dances: the one dancer's fingers and face (its body is `dancers[0]`).
+    pub holistic: Option<HolisticParts>,
+}
+
+/// The parts of a holistic dance beyond the SMPL 24 body: the same dancer as SMPL-H 52 (body
+/// joints 0–21 equal to the SMPL body's, then 15 left-hand and 15 right-hand finger joints) and
+/// the face as the 52 ARKit blendshape weights per frame.
+#[derive(Clone, Debug)]
+pub struct HolisticParts {
+    /// `(T, 52, 3)` local axis-angle rotations in SMPL-H order (root = world orientation).
+    pub poses: Vec<f32>,
+    /// `(T, 3)` pelvis world position, metres, Y-up (the body's `trans`).
+    pub trans: Vec<f32>,
+    /// The skeleton the rotations pose (`Skeleton::smplh52_approx` unless the model says
+    /// otherwise).
+    pub skeleton: dancegen_motion::skeleton::Skeleton,
+    /// `(T, 52)` ARKit weights in `[0, 1]`, Live Link order, at the motion's frame rate.
+    pub face: dancegen_motion::face::FaceWeights,
+    /// `(T, 103)` FLAME expression + jaw values of the face, when the user gave an ARKit → FLAME
+    /// mapping (written to `.json` as `"flame"`).
+    pub flame: Option<Vec<f32>>,
 }
 
 /// A group dance's stage record (stage frame of `dancegen_motion::formation`: `[x, z]`

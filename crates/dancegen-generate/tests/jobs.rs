@@ -277,6 +277,8 @@ fn bad_outputs_fail_before_any_work() {
     for (path, needle) in [
         (dir.path().join("a.fbz"), "unknown output format"),
         (dir.path().join("no/such/dir/a.glb"), "does not exist"),
+        // Only a holistic dance has a face for Live Link Face CSV.
+        (dir.path().join("face.csv"), "--system holistic"),
     ] {
         let e = g
             .run(

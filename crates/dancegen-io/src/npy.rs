@@ -42,7 +42,7 @@ fn write_npy_to<T: npyz::Serialize + npyz::AutoSerialize + Copy>(
     npy.finish()
 }
 
-/// Borrowed numeric data for a written array: the element type decides the numpy dtype.
+/// Borrowed data for a written array: the element type decides the numpy dtype.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum NpyData<'a> {
     /// `<f4`
@@ -51,6 +51,10 @@ pub enum NpyData<'a> {
     F64(&'a [f64]),
     /// `<i8`
     I64(&'a [i64]),
+    /// One unicode string, `<UN` with `N` its length in characters (at least 1), as
+    /// `numpy.array('neutral')` stores it: written with shape `[]` (a 0-d array, e.g. AMASS's
+    /// `gender`). Not read back by [`parse_npy`], which reads numbers only.
+    Str(&'a str),
 }
 
 impl NpyData<'_> {
@@ -60,6 +64,7 @@ impl NpyData<'_> {
             NpyData::F32(d) => d.len(),
             NpyData::F64(d) => d.len(),
             NpyData::I64(d) => d.len(),
+            NpyData::Str(_) => 1,
         }
     }
 
@@ -69,11 +74,12 @@ impl NpyData<'_> {
     }
 
     /// The numpy dtype string this data is written as.
-    pub fn dtype(&self) -> &'static str {
+    pub fn dtype(&self) -> String {
         match self {
-            NpyData::F32(_) => "<f4",
-            NpyData::F64(_) => "<f8",
-            NpyData::I64(_) => "<i8",
+            NpyData::F32(_) => "<f4".into(),
+            NpyData::F64(_) => "<f8".into(),
+            NpyData::I64(_) => "<i8".into(),
+            NpyData::Str(s) => format!("<U{}", s.chars().count().max(1)),
         }
     }
 }
@@ -99,7 +105,27 @@ pub fn write_npy_data_to(
         NpyData::F32(d) => write_npy_to(w, shape, d),
         NpyData::F64(d) => write_npy_to(w, shape, d),
         NpyData::I64(d) => write_npy_to(w, shape, d),
+        NpyData::Str(s) => write_npy_str_to(w, shape, s, &data.dtype()),
     }
+}
+
+/// Writes one string as a `dtype` (`<UN`) array of `shape` (holding one value).
+fn write_npy_str_to(
+    w: &mut dyn Write,
+    shape: &[usize],
+    s: &str,
+    dtype: &str,
+) -> std::io::Result<()> {
+    let type_str: npyz::TypeStr = dtype.parse().map_err(std::io::Error::other)?;
+    let shape_u64: Vec<u64> = shape.iter().map(|&s| s as u64).collect();
+    use npyz::WriterBuilder;
+    let mut npy = npyz::WriteOptions::<str>::new()
+        .dtype(npyz::DType::Plain(type_str))
+        .shape(&shape_u64)
+        .writer(w)
+        .begin_nd()?;
+    npy.push(s)?;
+    npy.finish()
 }
 
 /// A numpy array read as f64 values, whatever its numeric dtype.
@@ -231,6 +257,27 @@ mod tests {
     fn shape_mismatch_is_an_error() {
         let dir = tempfile::tempdir().unwrap();
         assert!(write_npy_f32(&dir.path().join("a.npy"), &[2, 2], &[1.0]).is_err());
+    }
+
+    #[test]
+    fn a_string_is_a_0d_unicode_array() {
+        let mut buf = Vec::new();
+        write_npy_data_to(&mut buf, &[], NpyData::Str("neutral")).unwrap();
+        let header = String::from_utf8_lossy(&buf[10..buf.len() - 28]).into_owned();
+        assert!(
+            header.contains("'descr': '<U7'") && header.contains("'shape': ()"),
+            "{header}"
+        );
+        // UTF-32LE code points, aligned as numpy aligns data.
+        let data = &buf[buf.len() - 28..];
+        let text: String = data
+            .chunks_exact(4)
+            .map(|c| char::from_u32(u32::from_le_bytes([c[0], c[1], c[2], c[3]])).unwrap())
+            .collect();
+        assert_eq!(text, "neutral");
+        assert_eq!((buf.len() - 28) % 64, 0);
+        assert_eq!(NpyData::Str("neutral").dtype(), "<U7");
+        assert!(write_npy_data_to(&mut Vec::new(), &[2], NpyData::Str("x")).is_err());
     }
 
     #[test]

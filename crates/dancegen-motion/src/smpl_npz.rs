@@ -36,6 +36,9 @@
 //! chains instead, so they are set to the **identity** rotation; finger, jaw and eye rotations
 //! are dropped.
 //!
+//! [`write_smplh_npz`] writes the SMPL-H form, `(T, 156)`, with the fingers (a holistic dance),
+//! plus `gender = "neutral"` as AMASS's SMPL-H files carry a gender.
+//!
 //! # Frame rate
 //!
 //! AMASS: `mocap_framerate` (SMPL-H) or `mocap_frame_rate` (SMPL-X), a scalar; required. EDGE
@@ -57,6 +60,10 @@ use crate::repr::motion::{AISTPP_PELVIS_REST, POSE_DIMS, SMPL_JOINTS, SmplMotion
 pub const BODY_JOINTS: usize = 22;
 /// Number of zero `betas` written to AMASS-style files.
 pub const WRITTEN_BETAS: usize = 10;
+/// SMPL-H joints: 22 body, 15 left-hand and 15 right-hand finger joints.
+pub const SMPLH_JOINTS: usize = 52;
+/// `gender` of the SMPL-H files we write: no body is fitted, so the neutral model's.
+pub const WRITTEN_GENDER: &str = "neutral";
 /// Frame rate assumed for EDGE-style files without a rate member (EDGE samples at 30 fps).
 pub const EDGE_FPS: f32 = 30.0;
 
@@ -251,10 +258,11 @@ fn fps_of<'a>(
     }
 }
 
-/// Root axis-angle and SMPL `transl` of frame `f` in an AMASS-style file's frame.
-fn amass_frame(m: &SmplMotion, f: usize, opts: &SmplNpzOptions) -> ([f64; 3], [f64; 3]) {
-    let aa = m.joint_aa(f, 0).map(f64::from);
-    let p = [m.trans[f * 3], m.trans[f * 3 + 1], m.trans[f * 3 + 2]].map(f64::from);
+/// Root axis-angle and SMPL `transl` of a frame in an AMASS-style file's frame, from the root
+/// rotation `aa` and the pelvis world position `pelvis` (Y-up).
+fn amass_frame(aa: &[f32], pelvis: &[f32], opts: &SmplNpzOptions) -> ([f64; 3], [f64; 3]) {
+    let aa = [aa[0], aa[1], aa[2]].map(f64::from);
+    let p = [pelvis[0], pelvis[1], pelvis[2]].map(f64::from);
     let j0 = opts.pelvis_rest.map(f64::from);
     match opts.up {
         UpAxis::Y => (aa, [p[0] - j0[0], p[1] - j0[1], p[2] - j0[2]]),
@@ -272,25 +280,74 @@ fn amass_frame(m: &SmplMotion, f: usize, opts: &SmplNpzOptions) -> ([f64; 3], [f
 /// SMPL `transl` (pelvis − `J0`, in the `opts.up` frame), `betas` zeros(10),
 /// `mocap_framerate` scalar.
 pub fn write_smpl_npz(path: &Path, m: &SmplMotion, opts: &SmplNpzOptions) -> Result<(), ReprError> {
-    let t = m.validate()?;
-    let mut poses: Vec<f64> = m.poses.iter().map(|&v| f64::from(v)).collect();
-    let mut trans = Vec::with_capacity(t * 3);
-    for f in 0..t {
-        let (root, tr) = amass_frame(m, f, opts);
-        poses[f * POSE_DIMS..f * POSE_DIMS + 3].copy_from_slice(&root);
-        trans.extend(tr);
+    m.validate()?;
+    write_amass(path, &m.poses, POSE_DIMS, &m.trans, m.fps, None, opts)
+}
+
+/// Writes an AMASS-style SMPL-H `.npz`, the keys of AMASS's SMPL-H release (float64):
+/// `poses` (T, 156) = 52 local axis-angle rotations in SMPL-H order (22 body joints, 15
+/// left-hand, 15 right-hand finger joints) with the root orientation in the `opts.up` frame,
+/// `trans` (T, 3) = SMPL `transl` as [`write_smpl_npz`] writes it (the `J0` caveat of the module
+/// documentation applies), `betas` zeros(10), `gender` `"neutral"` ([`WRITTEN_GENDER`], a 0-d
+/// unicode array as AMASS stores it) and `mocap_framerate`.
+///
+/// `poses` is `(T, 52, 3)`, `trans` `(T, 3)` the pelvis world position (metres, Y-up).
+/// [`read_smpl_npz`] reads the body of such a file back.
+pub fn write_smplh_npz(
+    path: &Path,
+    poses: &[f32],
+    trans: &[f32],
+    fps: f32,
+    opts: &SmplNpzOptions,
+) -> Result<(), ReprError> {
+    let width = SMPLH_JOINTS * 3;
+    let t = crate::repr::frames_of("SMPL-H poses", poses, width)?;
+    let tt = crate::repr::frames_of("SMPL-H trans", trans, 3)?;
+    if t != tt {
+        return Err(ReprError::FrameMismatch {
+            what: "SMPL-H motion",
+            poses: t,
+            trans: tt,
+        });
     }
-    let fps = [f64::from(m.fps)];
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(ReprError::Invalid(format!("fps {fps} is not positive")));
+    }
+    write_amass(path, poses, width, trans, fps, Some(WRITTEN_GENDER), opts)
+}
+
+/// The AMASS-style writer behind [`write_smpl_npz`] and [`write_smplh_npz`]: `poses` is
+/// `(T, width)` with the root first, `trans` the `(T, 3)` pelvis, shapes already checked.
+fn write_amass(
+    path: &Path,
+    poses: &[f32],
+    width: usize,
+    trans: &[f32],
+    fps: f32,
+    gender: Option<&str>,
+    opts: &SmplNpzOptions,
+) -> Result<(), ReprError> {
+    let t = trans.len() / 3;
+    let mut out_poses: Vec<f64> = poses.iter().map(|&v| f64::from(v)).collect();
+    let mut out_trans = Vec::with_capacity(t * 3);
+    for f in 0..t {
+        let (root, tr) = amass_frame(&poses[f * width..], &trans[f * 3..], opts);
+        out_poses[f * width..f * width + 3].copy_from_slice(&root);
+        out_trans.extend(tr);
+    }
+    let fps = [f64::from(fps)];
     let betas = [0.0f64; WRITTEN_BETAS];
-    write_npz(
-        path,
-        &[
-            ("poses", &[t, POSE_DIMS], NpyData::F64(&poses)),
-            ("trans", &[t, 3], NpyData::F64(&trans)),
-            ("betas", &[WRITTEN_BETAS], NpyData::F64(&betas)),
-            ("mocap_framerate", &[], NpyData::F64(&fps)),
-        ],
-    )?;
+    let (poses_shape, trans_shape) = ([t, width], [t, 3]);
+    let mut members: Vec<(&str, &[usize], NpyData<'_>)> = vec![
+        ("poses", &poses_shape, NpyData::F64(&out_poses)),
+        ("trans", &trans_shape, NpyData::F64(&out_trans)),
+        ("betas", &[WRITTEN_BETAS], NpyData::F64(&betas)),
+    ];
+    if let Some(g) = gender {
+        members.push(("gender", &[], NpyData::Str(g)));
+    }
+    members.push(("mocap_framerate", &[], NpyData::F64(&fps)));
+    write_npz(path, &members)?;
     Ok(())
 }
 
@@ -478,6 +535,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn smplh_writer_keeps_fingers_and_reads_back_the_body() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = 6;
+        let width = SMPLH_JOINTS * 3;
+        let poses: Vec<f32> = (0..t * width)
+            .map(|i| ((i % 89) as f32 - 44.0) * 0.01)
+            .collect();
+        let trans: Vec<f32> = (0..t * 3).map(|i| 0.9 + i as f32 * 0.01).collect();
+        let p = dir.path().join("h.npz");
+        let opts = SmplNpzOptions::default();
+        write_smplh_npz(&p, &poses, &trans, 30.0, &opts).unwrap();
+        let members = dancegen_io::read_npz_members(&p, &["poses", "trans", "betas"]).unwrap();
+        let got = &members.iter().find(|(n, _)| n == "poses").unwrap().1;
+        assert_eq!(got.shape, vec![t, width]);
+        // Fingers (and every non-root joint) as given; the root turned to Z-up.
+        for f in 0..t {
+            let (a, b) = (f * width + 3, (f + 1) * width);
+            assert!(max_diff(&got.data[a..b], &poses[a..b]) < 1e-7);
+        }
+        // The archive names `gender` (a unicode scalar our numeric reader skips).
+        let raw = std::fs::read(&p).unwrap();
+        assert!(raw.windows(10).any(|w| w == b"gender.npy"));
+        assert!(raw.windows(4).any(|w| w == b"<U7'"));
+        let r = read_smpl_npz(&p, &opts).unwrap();
+        assert_eq!((r.source_joints, r.motion.fps), (SMPLH_JOINTS, 30.0));
+        for f in 0..t {
+            let body = &r.motion.poses[f * 72..f * 72 + 66];
+            assert!(max_diff(body, &poses[f * width..f * width + 66]) < 1e-6);
+        }
+        assert!(max_diff(&r.motion.trans, &trans) < 1e-6);
+        let e = write_smplh_npz(&p, &poses[..width * 2], &trans, 30.0, &opts).unwrap_err();
+        assert!(e.to_string().contains("2 pose frames but 6"), "{e}");
+        assert!(write_smplh_npz(&p, &poses[1..], &trans, 30.0, &opts).is_err());
+        assert!(write_smplh_npz(&p, &poses, &trans, 0.0, &opts).is_err());
     }
 
     #[test]

@@ -142,7 +142,8 @@ impl Catalog {
             .collect();
         json!({
             "systems": systems,
-            "formats": ["glb", "fbx", "bvh", "npz", "npy", "json", "mp4"],
+            // `csv` (the face, Live Link Face) comes with holistic dances only.
+            "formats": ["glb", "fbx", "bvh", "npz", "npy", "json", "mp4", "csv"],
             "limits": {
                 "upload_bytes": limits.upload_bytes,
                 "song_seconds": limits.song_seconds,

@@ -349,12 +349,25 @@ pub const LEADER_NPY: &str = "leader.npy";
 /// Formats every job writes (`mp4` only when asked), as the contract lists them.
 pub const MOTION_FORMATS: [&str; 6] = ["glb", "fbx", "bvh", "npz", "npy", "json"];
 
+/// Formats only a dance with a face writes (the holistic system's): the face as Live Link Face
+/// CSV. Its motion files hold the fingers too (52 SMPL-H joints).
+pub const FACE_FORMATS: [&str; 1] = ["csv"];
+
+/// The system whose dances have a face (and fingers).
+pub const FACE_SYSTEM: &str = "holistic";
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn err(text: &str) -> ApiError {
         JobParams::parse(text, 4).unwrap_err()
+    }
+
+    #[test]
+    fn the_face_system_is_a_known_system() {
+        assert!(systems::SYSTEMS.iter().any(|s| s.name == FACE_SYSTEM));
+        assert!(FACE_FORMATS.iter().all(|f| !MOTION_FORMATS.contains(f)));
     }
 
     #[test]

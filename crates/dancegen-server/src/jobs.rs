@@ -14,7 +14,9 @@ use tokio::sync::watch;
 
 use crate::error::ApiError;
 use crate::files;
-use crate::job::{JobState, JobView, LEADER_NPY, MOTION_FORMATS, VariationView, variation_stem};
+use crate::job::{
+    FACE_FORMATS, JobState, JobView, LEADER_NPY, MOTION_FORMATS, VariationView, variation_stem,
+};
 use crate::store::{JobRow, Store};
 
 pub struct Jobs {
@@ -95,7 +97,7 @@ impl Jobs {
         for k in 0..row.params.variations {
             let stem = variation_stem(k);
             let mut by_kind = std::collections::BTreeMap::new();
-            for ext in MOTION_FORMATS.iter().chain(&["mp4"]) {
+            for ext in MOTION_FORMATS.iter().chain(&FACE_FORMATS).chain(&["mp4"]) {
                 let name = format!("{stem}.{ext}");
                 if let Some(u) = files.get(&name) {
                     by_kind.insert(ext.to_string(), u.clone());

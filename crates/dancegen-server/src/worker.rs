@@ -17,7 +17,9 @@ use dancegen_generate::{
 };
 
 use crate::error::chain;
-use crate::job::{JobParams, JobState, LEADER_NPY, MOTION_FORMATS, variation_stem};
+use crate::job::{
+    FACE_FORMATS, FACE_SYSTEM, JobParams, JobState, LEADER_NPY, MOTION_FORMATS, variation_stem,
+};
 use crate::jobs::Jobs;
 use crate::store::JobRow;
 
@@ -162,6 +164,13 @@ fn generate(
         if p.mp4 {
             outputs.push(OutputRequest::new(dir.join(format!("{stem}.mp4"))));
         }
+        if p.system == FACE_SYSTEM {
+            outputs.extend(
+                FACE_FORMATS
+                    .iter()
+                    .map(|ext| OutputRequest::new(dir.join(format!("{stem}.{ext}")))),
+            );
+        }
         if p.system == "duet" && k == 0 {
             outputs.push(OutputRequest {
                 path: dir.join(LEADER_NPY),
@@ -233,6 +242,7 @@ fn system_request(
             SystemRequest::Duet(DuetOptions::new(motion, path.display().to_string()))
         }
         "group" => SystemRequest::Group(GroupOptions::new(p.dancer_count())),
+        "holistic" => SystemRequest::Holistic(Default::default()),
         other => {
             return Err(GenerateError::Invalid(format!(
                 "the {other} system is not served"

@@ -311,6 +311,7 @@ impl DanceSystem for Duet {
             ),
             notes,
             group: None,
+            holistic: None,
         })
     }
 }

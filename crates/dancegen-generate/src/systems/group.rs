@@ -359,6 +359,7 @@ impl DanceSystem for Group {
             timing_breakdown: format!("sampling {sample_s:.2} s, post-processing {post_s:.2} s; "),
             notes,
             group: Some(report),
+            holistic: None,
         })
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod duet;
 pub mod group;
+pub mod holistic;
 pub mod solo;
 
 /// A system users can name.
@@ -36,13 +37,7 @@ pub const SYSTEMS: [SystemInfo; 4] = [
     shipped::<solo::Solo>("Lodge++"),
     shipped::<duet::Duet>("ReactDance"),
     shipped::<group::Group>("TCDiff++"),
-    SystemInfo {
-        name: "holistic",
-        method: "SoulNet",
-        model_kind: "",
-        default_model: "",
-        available: false,
-    },
+    shipped::<holistic::Holistic>("SoulNet"),
 ];
 
 /// The system called `name`, or an error listing the choices (and saying which ones this
@@ -61,16 +56,22 @@ pub fn by_name(name: &str) -> Result<SystemInfo, String> {
             s.method,
             available.join(", ")
         )),
-        None => Err(format!(
-            "unknown system '{name}'; choose one of: {} (coming: {})",
-            available.join(", "),
-            SYSTEMS
+        None => {
+            let coming: Vec<&str> = SYSTEMS
                 .iter()
                 .filter(|s| !s.available)
                 .map(|s| s.name)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
+                .collect();
+            Err(format!(
+                "unknown system '{name}'; choose one of: {}{}",
+                available.join(", "),
+                if coming.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (coming: {})", coming.join(", "))
+                }
+            ))
+        }
     }
 }
 

@@ -160,6 +160,7 @@ impl DanceSystem for Solo {
             timing_breakdown: String::new(),
             notes,
             group: None,
+            holistic: None,
         })
     }
 }

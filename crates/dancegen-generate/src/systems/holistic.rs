@@ -1,0 +1,163 @@
+//! Holistic: one dancer with fingers and a face (SoulNet, `dancegen_soulnet`).
+//!
+//! Song span → EDGE-35 features → part tokens window by window → `[body | hands | face]` frames
+//! → SMPL-H 52 motion standing on the floor (its first 22 joints are also the SMPL 24 body every
+//! other output and the previews use) and 52 ARKit weights per frame.
+
+use std::path::{Path, PathBuf};
+
+use dancegen_motion::face::{FaceWeights, flame::FlameMapping};
+use dancegen_motion::repr::SmplMotion;
+use dancegen_motion::repr::motion::GroundMode;
+use dancegen_motion::skeleton::Skeleton;
+use dancegen_nn::burn::tensor::Device;
+use dancegen_soulnet::bundle::HolisticModel;
+use dancegen_soulnet::pipeline::{self, GenerateOptions, TOKENS};
+
+use crate::error::GenerateError;
+use crate::request::CommonOptions;
+use crate::song::FPS;
+use crate::system::{Dance, DanceInput, DanceSystem, Dancer, HolisticParts, Role};
+use crate::systems::solo::keep_feet_above_floor;
+
+/// Shortest music the model dances to.
+pub const MIN_SONG_SECONDS: f64 = 2.0;
+
+/// Holistic options beyond [`CommonOptions`].
+#[derive(Clone, Debug, Default)]
+pub struct HolisticOptions {
+    /// A user's `(52, 103)` ARKit → FLAME mapping (`.npy`): the dance's face is then also given
+    /// as FLAME's 100 expression + 3 jaw values (`.json` key `"flame"`). FLAME and SoulNet's
+    /// mapping are not redistributable, so none is shipped.
+    pub flame_mapping: Option<PathBuf>,
+}
+
+pub struct Holistic;
+
+impl DanceSystem for Holistic {
+    const NAME: &'static str = "holistic";
+    const MODEL_KIND: &'static str = dancegen_soulnet::bundle::KIND;
+    const DEFAULT_MODEL: &'static str = "soulnet-small";
+    const PARTS: &'static [(&'static str, f64)] = &[(TOKENS, 1.0)];
+
+    type Model = HolisticModel;
+    type Options = HolisticOptions;
+
+    fn load(dir: &Path, device: &Device) -> Result<HolisticModel, GenerateError> {
+        HolisticModel::load(dir, device).map_err(|e| GenerateError::ModelLoad {
+            system: "SoulNet",
+            dir: dir.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    fn check(
+        _: &HolisticModel,
+        common: &CommonOptions,
+        options: &HolisticOptions,
+    ) -> Result<(), GenerateError> {
+        if let Some(w) = common.guidance
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(GenerateError::Invalid(format!(
+                "--guidance {w}: use a non-negative number (1 = no guidance, 4 = SoulNet's)"
+            )));
+        }
+        if common.steps == Some(0) {
+            return Err(GenerateError::Invalid("--steps must be at least 1".into()));
+        }
+        if let Some(g) = &common.genre {
+            return Err(GenerateError::Invalid(format!(
+                "--genre {g}: the holistic model has no genres (it dances to the music alone)"
+            )));
+        }
+        if let Some(p) = &options.flame_mapping {
+            FlameMapping::read(p).map_err(|e| GenerateError::Invalid(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    fn dance(
+        model: &HolisticModel,
+        input: DanceInput<'_, HolisticOptions>,
+    ) -> Result<Dance, GenerateError> {
+        let song = input.song;
+        let span = song.span(input.common.start, input.common.end)?;
+        if span.seconds() < MIN_SONG_SECONDS {
+            return Err(GenerateError::Invalid(format!(
+                "{}: {:.2} s of music to dance to; the model needs at least {MIN_SONG_SECONDS} s",
+                song.label,
+                span.seconds()
+            )));
+        }
+        let mut opts = GenerateOptions::defaults(model, input.common.seed);
+        if let Some(s) = input.common.steps {
+            opts.sampling.steps = s;
+        }
+        if let Some(w) = input.common.guidance {
+            opts.sampling.cond_scale = w;
+        }
+        let made = pipeline::generate(model, song.music(&span), &opts, input.device, input.hook)
+            .map_err(|e| match e {
+                pipeline::GenerateError::Cancelled(_) => GenerateError::Cancelled,
+                pipeline::GenerateError::Invalid(r) => GenerateError::Generation(r),
+            })?;
+        let decoded = dancegen_soulnet::layout::decode(&made.rows, FPS as f32)
+            .map_err(GenerateError::Generation)?;
+        let mut hol = decoded.motion;
+        let t = hol.frames();
+        let mut body = SmplMotion {
+            fps: FPS as f32,
+            poses: body_of(&hol.poses, t),
+            trans: hol.trans.clone(),
+        };
+        let gen_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
+        body.put_on_ground_with(GroundMode::SupportFeet)
+            .map_err(|e| gen_err(&e))?;
+        keep_feet_above_floor(&mut body).map_err(GenerateError::Generation)?;
+        hol.trans.clone_from(&body.trans);
+        let face_values = decoded.face[..t * dancegen_motion::face::ARKIT_COUNT].to_vec();
+        let face = FaceWeights::new(face_values, FPS as f32).map_err(|e| gen_err(&e))?;
+        let flame = match &input.options.flame_mapping {
+            Some(p) => {
+                let m = FlameMapping::read(p).map_err(|e| GenerateError::Invalid(e.to_string()))?;
+                Some((0..t).flat_map(|f| m.to_flame(face.frame(f))).collect())
+            }
+            None => None,
+        };
+        Ok(Dance {
+            dancers: vec![Dancer {
+                role: Role::Solo,
+                motion: body,
+            }],
+            span,
+            summary: format!(
+                "{t} frames ({:.1} s at {FPS} fps) with fingers and face, seed {}, {} windows",
+                t as f64 / f64::from(FPS),
+                input.common.seed,
+                made.windows,
+            ),
+            timing_breakdown: String::new(),
+            notes: vec![
+                "the fingers and face were learned from synthetic data (see the model card)".into(),
+            ],
+            group: None,
+            holistic: Some(HolisticParts {
+                poses: hol.poses,
+                trans: hol.trans,
+                skeleton: Skeleton::smplh52_approx(),
+                face,
+                flame,
+            }),
+        })
+    }
+}
+
+/// SMPL 24 rotations of SMPL-H 52 ones: body joints 0–21, the two SMPL hand joints at rest.
+fn body_of(poses52: &[f32], t: usize) -> Vec<f32> {
+    let mut out = vec![0f32; t * 72];
+    for f in 0..t {
+        out[f * 72..f * 72 + 66].copy_from_slice(&poses52[f * 156..f * 156 + 66]);
+    }
+    out
+}
