@@ -8,6 +8,7 @@ use anyhow::{Result, bail};
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader};
 use dancegen_generate::systems::group::{GroupOptions, LongSampler};
+use dancegen_generate::systems::holistic::HolisticOptions;
 
 use dancegen_generate::systems::solo::{SoloOptions, SoloSampler};
 use dancegen_generate::{CancelToken, Generator, ModelLocator, Progress, Request, Song};
@@ -64,11 +65,20 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         ("duet", None) => bail!("the duet system dances with a leader: give --leader FILE"),
         ("group", Some(_)) => bail!("--leader makes a duet; the group system takes no leader"),
         ("group", None) => SystemRequest::Group(group_options(args)?),
+        ("holistic", Some(_)) => {
+            bail!("--leader makes a duet; the holistic system dances alone")
+        }
+        ("holistic", None) => SystemRequest::Holistic(HolisticOptions {
+            flame_mapping: args.flame_mapping.clone(),
+        }),
         (other, _) => bail!("--system {other} is not wired into this command yet"),
     };
     let group = matches!(system, SystemRequest::Group(_));
     if !group && (args.dancers.is_some() || args.formation.is_some() || args.unison) {
         bail!("--dancers, --formation and --unison make a group dance: add --system group");
+    }
+    if args.flame_mapping.is_some() && !matches!(system, SystemRequest::Holistic(_)) {
+        bail!("--flame-mapping maps a face: add --system holistic");
     }
     let duet = matches!(system, SystemRequest::Duet(_));
     let outputs: Vec<PathBuf> = if args.output.is_empty() {

@@ -305,7 +305,7 @@ fn json_progress_grows_to_one_on_stderr() {
 
 #[test]
 fn systems_are_chosen_by_name_with_clear_errors() {
-    // Not shipped yet: says so and lists the ones that are.
+    // The holistic model dances to the music alone: a genre is refused, by name.
     let o = dancegen(&[
         "-q",
         "generate",
@@ -314,13 +314,27 @@ fn systems_are_chosen_by_name_with_clear_errors() {
         "3",
         "--system",
         "holistic",
+        "--genre",
+        "salsa",
     ]);
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(
-        e.contains("holistic") && e.contains("solo, duet, group"),
+        e.contains("--genre salsa") && e.contains("no genres"),
         "{e}"
     );
+    // A face mapping needs a face.
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--end",
+        "3",
+        "--flame-mapping",
+        "m.npy",
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--system holistic"), "{}", stderr(&o));
     // Shipped, but a group needs its size.
     let o = dancegen(&["-q", "generate", &song(), "--end", "3", "--system", "group"]);
     assert!(!o.status.success());

@@ -243,6 +243,22 @@ pub fn hinge_generator(fake: Tensor<2>) -> Tensor<1> {
     fake.mean().neg()
 }
 
+/// Cross-entropy of `logits` `[B, L, V]` against `targets` `[B, L]`, averaged over the positions
+/// with `weight` `[B, L]` (1 = counted, 0 = ignored; e.g. only the masked tokens of a masked
+/// transformer). Zero when no position counts.
+pub fn masked_cross_entropy(
+    logits: Tensor<3>,
+    targets: Tensor<2, Int>,
+    weight: Tensor<2>,
+) -> Tensor<1> {
+    let [b, l, _] = logits.dims();
+    let picked = log_softmax(logits, 2)
+        .gather(2, targets.reshape([b, l, 1]))
+        .reshape([b, l]);
+    let total = weight.clone().sum();
+    (picked * weight).sum().neg() / total.clamp_min(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -298,20 +314,4 @@ mod tests {
         let want = (ce(&l) + ce(&|i, j| l(j, i))) / 2.0;
         assert!((filt as f64 - want).abs() < 1e-4, "{filt} vs {want}");
     }
-}
-
-/// Cross-entropy of `logits` `[B, L, V]` against `targets` `[B, L]`, averaged over the positions
-/// with `weight` `[B, L]` (1 = counted, 0 = ignored; e.g. only the masked tokens of a masked
-/// transformer). Zero when no position counts.
-pub fn masked_cross_entropy(
-    logits: Tensor<3>,
-    targets: Tensor<2, Int>,
-    weight: Tensor<2>,
-) -> Tensor<1> {
-    let [b, l, _] = logits.dims();
-    let picked = log_softmax(logits, 2)
-        .gather(2, targets.reshape([b, l, 1]))
-        .reshape([b, l]);
-    let total = weight.clone().sum();
-    (picked * weight).sum().neg() / total.clamp_min(1.0)
 }

@@ -364,9 +364,9 @@ mod tests {
         // E[cos(π/2 u)] = 2/π of the positions.
         let share = f64::from(chosen) / ids.len() as f64;
         assert!((share - 2.0 / std::f64::consts::PI).abs() < 0.05, "{share}");
-        for p in 0..ids.len() {
-            if c.weight[p] == 0.0 {
-                assert_eq!(c.input[p], ids[p]);
+        for ((w, got), want) in c.weight.iter().zip(&c.input).zip(&ids) {
+            if *w == 0.0 {
+                assert_eq!(got, want);
             }
         }
         let masked = c.input.iter().filter(|&&i| i == 7).count() as f64;
