@@ -296,8 +296,18 @@ pub struct BundleArgs {
     /// Finished `tcdiffpp_group` run directory (group model).
     #[arg(long, value_name = "RUN", conflicts_with_all = ["vqvae", "hfsq"])]
     pub group: Option<PathBuf>,
-    /// Model name written to model.toml (default: lodgepp-small, reactdance-small or
-    /// tcdiffpp-small).
+    /// Finished `soulnet_vq` run directory (holistic model).
+    #[arg(long, value_name = "RUN", requires_all = ["holistic_mmr", "holistic_generator"],
+          conflicts_with_all = ["vqvae", "hfsq", "group"])]
+    pub holistic_vq: Option<PathBuf>,
+    /// Finished `soulnet_mmr` run directory (holistic model).
+    #[arg(long, value_name = "RUN", requires = "holistic_vq")]
+    pub holistic_mmr: Option<PathBuf>,
+    /// Finished `soulnet_magm` run directory (holistic model).
+    #[arg(long, value_name = "RUN", requires = "holistic_vq")]
+    pub holistic_generator: Option<PathBuf>,
+    /// Model name written to model.toml (default: lodgepp-small, reactdance-small,
+    /// tcdiffpp-small or soulnet-small).
     #[arg(long)]
     pub name: Option<String>,
     #[arg(long)]

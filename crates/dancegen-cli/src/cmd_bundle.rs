@@ -1,17 +1,36 @@
 //! `dancegen bundle`: one model directory from its training runs (Lodge++: three; the duet
-//! model: two).
+//! model: two; the group model: one; the holistic model: three).
 
 use std::io::Write;
 
 use anyhow::{Result, bail};
 use dancegen_train::tasks::lodgepp::assemble_bundle;
 use dancegen_train::tasks::reactdance::assemble_duet_bundle;
+use dancegen_train::tasks::soulnet::assemble_holistic_bundle;
 use dancegen_train::tasks::tcdiffpp::assemble_group_bundle;
 
 use crate::cli::BundleArgs;
 use crate::progress::spinner;
 
 pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
+    if let (Some(vq), Some(mmr), Some(generator)) = (
+        &args.holistic_vq,
+        &args.holistic_mmr,
+        &args.holistic_generator,
+    ) {
+        let name = args.name.as_deref().unwrap_or("soulnet-small");
+        let pb = spinner("assembling the holistic model", quiet);
+        assemble_holistic_bundle(vq, mmr, generator, &args.output, name)?;
+        pb.finish_and_clear();
+        if !quiet {
+            writeln!(
+                std::io::stdout().lock(),
+                "{name} -> {}",
+                args.output.display()
+            )?;
+        }
+        return Ok(());
+    }
     if let Some(run) = &args.group {
         let name = args.name.as_deref().unwrap_or("tcdiffpp-small");
         let pb = spinner("assembling the group model", quiet);
@@ -42,8 +61,9 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
     }
     let (Some(vqvae), Some(gpt), Some(pddm)) = (&args.vqvae, &args.gpt, &args.pddm) else {
         bail!(
-            "give --vqvae, --gpt and --pddm (solo model), --hfsq and --ldm (duet model) or \
-             --group (group model)"
+            "give --vqvae, --gpt and --pddm (solo model), --hfsq and --ldm (duet model), \
+             --group (group model) or --holistic-vq, --holistic-mmr and --holistic-generator \
+             (holistic model)"
         );
     };
     let name = args.name.as_deref().unwrap_or("lodgepp-small");
