@@ -1,0 +1,233 @@
+//! Measurements of the holistic model's networks on held-out data (issue 19,
+//! `docs/holistic-eval.md`), printed as one JSON object:
+//!
+//! - `mmr MODEL_DIR DATASET_DIR`: the bundle's MMR on the held-out clips
+//!   (`DATASET_DIR/held_out/{motion,holistic,music}`): music retrieval by motion over
+//!   non-overlapping 128-frame windows (R@1, R@3 against chance, Euclidean like the metric code)
+//!   and the MMR-Matching Score (Eq. 8 over 1-s segments, and the released code's variant with one
+//!   music latent per clip) of the real held-out dances;
+//! - `recon DATASET_DIR VQ_RUN...`: each part autoencoder run's reconstruction of the held-out
+//!   clips, per part: root-relative body joint error (real motion), finger joint error relative to
+//!   the wrist and ARKit weight error (synthetic hands and face), in data units.
+//!
+//!     cargo run --release -p dancegen-train --example holistic_probe -- mmr models/soulnet-small target/datasets/holistic
+//!     cargo run --release -p dancegen-train --example holistic_probe -- recon target/datasets/holistic target/runs/soulnet_small_vq ...
+
+use std::path::{Path, PathBuf};
+
+use dancegen_metrics::mmr::{
+    MatchingVariant, SequenceLatents, chance_recall, matching_score, recall_at, retrieval_ranks,
+};
+use dancegen_motion::face::ARKIT_COUNT;
+use dancegen_motion::skeleton::Skeleton;
+use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
+use dancegen_nn::device;
+use dancegen_nn::retrieval::SequenceEncoder;
+use dancegen_nn::weights::{self, Layout};
+use dancegen_soulnet::bundle::HolisticModel;
+use dancegen_soulnet::layout::{MUSIC_DIMS, TOTAL_DIMS, decode};
+use dancegen_train::data::{Clip, Normalizer, load_clips, motion_files};
+use dancegen_train::tasks::soulnet::{KIND, VqTable};
+use dancegen_train::{TrainConfig, files};
+
+/// Retrieval window (the MMR's training window, one generator window).
+const WINDOW: usize = 128;
+/// Eq. 8's segment: one second.
+const SEGMENT: usize = 30;
+
+fn held_out(dataset: &Path) -> Result<Vec<Clip>, String> {
+    let h = dataset.join("held_out");
+    let text = format!(
+        "[run]\ndir = \"/tmp/unused\"\nsteps = 1\n[data]\npaths = [\"{m}\"]\nholistic = \"{hol}\"\n\
+         representation = \"holistic\"\nwindow = 64\n[data.music]\ndir = \"{mu}\"\ndims = {MUSIC_DIMS}\n\
+         [model]\nkind = \"{KIND}\"\n[optimizer]\nkind = \"adamw\"\nlr = 1e-3\n",
+        m = h.join("motion").display(),
+        hol = h.join("holistic").display(),
+        mu = h.join("music").display(),
+    );
+    let c = TrainConfig::parse(&text, Path::new("/")).map_err(|e| e.to_string())?;
+    let mut clips = Vec::new();
+    for f in motion_files(&c.data.paths).map_err(|e| e.to_string())? {
+        clips.extend(load_clips(&f, &c.data).map_err(|e| e.to_string())?);
+    }
+    if clips.is_empty() {
+        return Err(format!("{}: no held-out clips", h.display()));
+    }
+    Ok(clips)
+}
+
+fn embed(enc: &SequenceEncoder, rows: &[f32], dims: usize, dev: &Device) -> Vec<f32> {
+    let t = rows.len() / dims;
+    let x = Tensor::<3>::from_data(TensorData::new(rows.to_vec(), [1, t, dims]), dev);
+    enc.forward(x, None)
+        .into_data()
+        .convert::<f32>()
+        .to_vec::<f32>()
+        .unwrap()
+}
+
+fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
+    let dev = device::inference();
+    let model = HolisticModel::load(model_dir, &dev).map_err(|e| e.to_string())?;
+    let clips = held_out(dataset)?;
+    let (mut zm, mut za) = (Vec::new(), Vec::new());
+    let mut seqs: Vec<(Vec<Vec<f32>>, Vec<Vec<f32>>, Vec<Vec<f32>>)> = Vec::new();
+    for c in &clips {
+        let mut motion = c.motion.clone();
+        model.norm.transform(&mut motion);
+        let music = c.music.as_ref().ok_or("held-out clip without music")?;
+        let frames = c.frames.min(music.len() / MUSIC_DIMS);
+        for s in (0..frames.saturating_sub(WINDOW - 1)).step_by(WINDOW) {
+            let m = &motion[s * TOTAL_DIMS..(s + WINDOW) * TOTAL_DIMS];
+            let a = &music[s * MUSIC_DIMS..(s + WINDOW) * MUSIC_DIMS];
+            zm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
+            za.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
+        }
+        let (mut segm, mut sega) = (Vec::new(), Vec::new());
+        for s in (0..frames.saturating_sub(SEGMENT - 1)).step_by(SEGMENT) {
+            let m = &motion[s * TOTAL_DIMS..(s + SEGMENT) * TOTAL_DIMS];
+            let a = &music[s * MUSIC_DIMS..(s + SEGMENT) * MUSIC_DIMS];
+            segm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
+            sega.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
+        }
+        let whole = vec![embed(
+            &model.mmr.music,
+            &music[..frames * MUSIC_DIMS],
+            MUSIC_DIMS,
+            &dev,
+        )];
+        seqs.push((segm, sega, whole));
+    }
+    let ranks = retrieval_ranks(&zm, &za);
+    let paper: Vec<SequenceLatents> = seqs
+        .iter()
+        .map(|(m, a, _)| SequenceLatents {
+            motion: m,
+            music: a,
+        })
+        .collect();
+    let released: Vec<SequenceLatents> = seqs
+        .iter()
+        .map(|(m, _, w)| SequenceLatents {
+            motion: m,
+            music: w,
+        })
+        .collect();
+    Ok(serde_json::json!({
+        "clips": clips.len(),
+        "windows": zm.len(),
+        "window_frames": WINDOW,
+        "r1": recall_at(&ranks, 1),
+        "r3": recall_at(&ranks, 3),
+        "chance_r1": chance_recall(zm.len(), 1),
+        "chance_r3": chance_recall(zm.len(), 3),
+        "matching_score_eq8": matching_score(&paper, MatchingVariant::Paper),
+        "matching_score_released_code": matching_score(&released, MatchingVariant::ReleasedCode),
+    }))
+}
+
+/// Root-relative world joints `(T, 52, 3)` and face weights of normalised rows.
+fn joints_and_face(rows: &[f32], norm: &Normalizer) -> Result<(Vec<f32>, Vec<f32>), String> {
+    let mut r = rows.to_vec();
+    norm.inverse(&mut r)?;
+    let d = decode(&r, 30.0)?;
+    let mut j = d
+        .motion
+        .joints_world_with(&Skeleton::smplh52_approx())
+        .map_err(|e| e.to_string())?;
+    for f in j.chunks_exact_mut(52 * 3) {
+        let root = [f[0], f[1], f[2]];
+        for p in f.chunks_exact_mut(3) {
+            for k in 0..3 {
+                p[k] -= root[k];
+            }
+        }
+    }
+    Ok((j, d.face))
+}
+
+fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> {
+    let dev = device::inference();
+    let clips = held_out(dataset)?;
+    let mut out = Vec::new();
+    for run in runs {
+        let table: VqTable = dancegen_train::tasks::bundle_files::finished_run_config(run, KIND)
+            .map_err(|e| e.to_string())?;
+        let vq = weights::load(
+            table.autoencoder().init(&dev),
+            &run.join(files::WEIGHTS),
+            Layout::Burn,
+        )
+        .map_err(|e| e.to_string())?;
+        let norm = Normalizer::load(&run.join(files::NORMALIZER)).map_err(|e| e.to_string())?;
+        let (mut body, mut hands, mut face, mut n) = (0f64, 0f64, 0f64, 0usize);
+        for c in &clips {
+            let t = c.frames / 4 * 4;
+            let mut x = c.motion[..t * TOTAL_DIMS].to_vec();
+            norm.transform(&mut x)?;
+            let input =
+                Tensor::<3>::from_data(TensorData::new(x.clone(), [1, t, TOTAL_DIMS]), &dev);
+            let (rec, _) = vq.forward(input);
+            let y: Vec<f32> = rec.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
+            let (jx, fx) = joints_and_face(&x, &norm)?;
+            let (jy, fy) = joints_and_face(&y, &norm)?;
+            for f in 0..t {
+                let dist = |j: usize, rel: Option<usize>| {
+                    let p = |v: &[f32], j: usize, k: usize| v[(f * 52 + j) * 3 + k];
+                    (0..3)
+                        .map(|k| {
+                            let o = |v: &[f32]| rel.map_or(0.0, |w| p(v, w, k));
+                            let a = p(&jx, j, k) - o(&jx);
+                            let b = p(&jy, j, k) - o(&jy);
+                            f64::from(a - b).powi(2)
+                        })
+                        .sum::<f64>()
+                        .sqrt()
+                };
+                body += (1..22).map(|j| dist(j, None)).sum::<f64>() / 21.0;
+                // Fingers relative to their wrist (left 20, right 21).
+                hands += (22..52)
+                    .map(|j| dist(j, Some(if j < 37 { 20 } else { 21 })))
+                    .sum::<f64>()
+                    / 30.0;
+                face += (0..ARKIT_COUNT)
+                    .map(|k| f64::from((fx[f * ARKIT_COUNT + k] - fy[f * ARKIT_COUNT + k]).abs()))
+                    .sum::<f64>()
+                    / ARKIT_COUNT as f64;
+                n += 1;
+            }
+        }
+        out.push(serde_json::json!({
+            "run": run.display().to_string(),
+            "quantizer": table.quantizer,
+            "levels": table.levels(),
+            "nb_code": table.nb_code,
+            "frames": n,
+            "body_mpjpe_mm": 1000.0 * body / n as f64,
+            "finger_mpjpe_mm": 1000.0 * hands / n as f64,
+            "face_l1": face / n as f64,
+        }));
+    }
+    Ok(serde_json::Value::Array(out))
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("mmr") if args.len() == 3 => mmr(Path::new(&args[1]), Path::new(&args[2])),
+        Some("recon") if args.len() >= 3 => recon(
+            Path::new(&args[1]),
+            &args[2..].iter().map(PathBuf::from).collect::<Vec<_>>(),
+        ),
+        _ => Err(
+            "usage: holistic_probe mmr MODEL_DIR DATASET_DIR | recon DATASET_DIR VQ_RUN...".into(),
+        ),
+    };
+    match result {
+        Ok(v) => println!("{}", serde_json::to_string_pretty(&v).unwrap()),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    }
+}
