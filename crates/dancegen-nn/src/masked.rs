@@ -257,11 +257,20 @@ impl MaskedTransformer {
                 break;
             }
             let tok = Tensor::<2, Int>::from_data(TensorData::new(ids.clone(), [b, len]), &device);
-            let c = self.forward_with(tok.clone(), cond.clone(), frame.clone());
             let logits = if opts.cond_scale == 1.0 {
-                c
+                self.forward_with(tok, cond.clone(), frame.clone())
             } else {
-                let u = self.forward_with(tok, uncond.clone(), frame_uncond.clone());
+                // Conditional and unconditional rows in one batch: one pass instead of two.
+                let both = self.forward_with(
+                    Tensor::cat(vec![tok.clone(), tok], 0),
+                    Tensor::cat(vec![cond.clone(), uncond.clone()], 0),
+                    frame
+                        .clone()
+                        .zip(frame_uncond.clone())
+                        .map(|(f, u)| Tensor::cat(vec![f, u], 0)),
+                );
+                let c = both.clone().narrow(0, 0, b);
+                let u = both.narrow(0, b, b);
                 u.clone() + (c - u) * opts.cond_scale
             };
             let probs: Vec<f32> = softmax(logits.clone(), 2)

@@ -181,11 +181,21 @@ impl ResidualTransformer {
         let keep = (((1.0 - opts.topk_filter_thres) * v as f64).ceil() as usize).clamp(1, v);
         for level in 1..q {
             let tok = Tensor::<3, Int>::from_data(TensorData::new(ids.clone(), [b, l, q]), &device);
-            let c = self.forward(tok.clone(), level, cond.clone(), frame.clone());
             let logits = if opts.cond_scale == 1.0 {
-                c
+                self.forward(tok, level, cond.clone(), frame.clone())
             } else {
-                let u = self.forward(tok, level, uncond.clone(), frame_uncond.clone());
+                // Conditional and unconditional rows in one batch: one pass instead of two.
+                let both = self.forward(
+                    Tensor::cat(vec![tok.clone(), tok], 0),
+                    level,
+                    Tensor::cat(vec![cond.clone(), uncond.clone()], 0),
+                    frame
+                        .clone()
+                        .zip(frame_uncond.clone())
+                        .map(|(f, u)| Tensor::cat(vec![f, u], 0)),
+                );
+                let c = both.clone().narrow(0, 0, b);
+                let u = both.narrow(0, b, b);
                 u.clone() + (c - u) * opts.cond_scale
             };
             let raw: Vec<f32> = logits

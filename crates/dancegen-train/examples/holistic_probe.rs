@@ -168,7 +168,11 @@ fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> 
             let input =
                 Tensor::<3>::from_data(TensorData::new(x.clone(), [1, t, TOTAL_DIMS]), &dev);
             let (rec, _) = vq.forward(input);
-            let y: Vec<f32> = rec.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
+            let y: Vec<f32> = rec
+                .into_data()
+                .convert::<f32>()
+                .try_to_vec::<f32>()
+                .unwrap();
             let (jx, fx) = joints_and_face(&x, &norm)?;
             let (jy, fy) = joints_and_face(&y, &norm)?;
             for f in 0..t {
