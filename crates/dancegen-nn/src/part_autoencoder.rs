@@ -218,6 +218,54 @@ impl PartAutoencoder {
         self.decoder.forward(self.codes(indices))
     }
 
+    /// The three parts' base-level codebooks `[K, d]` (body, hands, face).
+    pub fn base_codebooks(&self) -> [Tensor<2>; PARTS] {
+        match &self.quantizer {
+            PartQuantizer::Hrvq(q) => [
+                q.layers_body[0].codebook.value_sync(),
+                q.layers_hands[0].codebook.value_sync(),
+                q.layers_face[0].codebook.value_sync(),
+            ],
+            PartQuantizer::Rvq(qs) => {
+                std::array::from_fn(|p| qs[p].layers[0].codebook.value_sync())
+            }
+            PartQuantizer::Vq(qs) => std::array::from_fn(|p| qs[p].codebook.value_sync()),
+        }
+    }
+
+    /// Summed part codes `[B, T', 3d]` with the base level given as a distribution over the
+    /// codes, `base` `[B, 3T', K]` (each row sums to 1; one-hot gives [`Self::codes`]), and the
+    /// higher levels from `indices` `[B, 3T', Q]` (their level 0 is ignored). Differentiable in
+    /// `base`: SoulNet's training-time MMR loss decodes the generator's Gumbel-softmax draws
+    /// through it (holistic.md §1.4, where the release decodes with the body codebook only).
+    pub fn soft_codes(&self, base: Tensor<3>, indices: Tensor<3, Int>) -> Tensor<3> {
+        let [b, t3, _] = base.dims();
+        let t = t3 / PARTS;
+        let books = self.base_codebooks();
+        let soft = Tensor::cat(
+            (0..PARTS)
+                .map(|p| {
+                    let book = books[p].clone();
+                    let [k, d] = book.dims();
+                    base.clone()
+                        .narrow(1, p * t, t)
+                        .reshape([b * t, k])
+                        .matmul(book)
+                        .reshape([b, t, d])
+                })
+                .collect(),
+            2,
+        );
+        let [_, _, q] = indices.dims();
+        if q < 2 {
+            return soft;
+        }
+        let device = indices.device();
+        let dropped = Tensor::<3, Int>::full([b, t3, 1], -1, &device);
+        let higher = Tensor::cat(vec![dropped, indices.narrow(2, 1, q - 1)], 2);
+        soft + self.codes(higher)
+    }
+
     /// Training loss of a batch `[B, T, D]` (see the module documentation).
     pub fn loss(&self, x: Tensor<3>) -> PartAutoencoderLoss {
         let (reconstruction, quant) = self.forward(x.clone());
@@ -320,8 +368,19 @@ mod tests {
             let codes = ae.codes(idx.clone());
             let diff = (codes - quant.quantized).abs().max().into_scalar::<f32>();
             assert!(diff < 1e-5, "{kind}: codes differ by {diff}");
-            let diff = (ae.decode(idx) - rec).abs().max().into_scalar::<f32>();
+            let diff = (ae.decode(idx.clone()) - rec)
+                .abs()
+                .max()
+                .into_scalar::<f32>();
             assert!(diff < 1e-4, "{kind}: decode differs by {diff}");
+            // The base level as a one-hot distribution gives the same codes.
+            let base = idx.clone().narrow(2, 0, 1).reshape([2, 12]);
+            let onehot = base.one_hot::<3>(16).float();
+            let diff = (ae.soft_codes(onehot, idx.clone()) - ae.codes(idx))
+                .abs()
+                .max()
+                .into_scalar::<f32>();
+            assert!(diff < 1e-5, "{kind}: soft codes differ by {diff}");
         }
     }
 

@@ -43,6 +43,43 @@ impl Condition {
     }
 }
 
+/// SoulNet's training-time alignment (holistic.md §1.4): the generator's base tokens, drawn by
+/// Gumbel-softmax at `tau` where the loss is taken (the true codes elsewhere), are decoded by the
+/// frozen part autoencoder (true higher levels) and the frozen MMR's motion encoder must find
+/// the window's own music among the batch's (filtered InfoNCE). Differentiable in the logits.
+///
+/// The release decodes with the body codebook only and a wrong reshape (§1.4); here each part
+/// uses its own base codebook. Gumbel noise comes from `seed` (resumable).
+#[allow(clippy::too_many_arguments)]
+pub fn mmr_alignment_loss(
+    l: &GeneratorLoss,
+    indices: &[i64],
+    [b, len, q]: [usize; 3],
+    vq: &dancegen_nn::part_autoencoder::PartAutoencoder,
+    mmr: &dancegen_nn::retrieval::MusicMotionRetrieval,
+    music: Tensor<3>,
+    tau: f64,
+    seed: u64,
+) -> Tensor<1> {
+    let device = l.logits.device();
+    let k = l.logits.dims()[2];
+    let mut rng = SplitMix64(seed);
+    let gumbel: Vec<f32> = (0..b * len * k)
+        .map(|_| {
+            let u = rng.next_f64().clamp(1e-20, 1.0 - 1e-12);
+            -(-u.ln()).ln() as f32
+        })
+        .collect();
+    let g = Tensor::<3>::from_data(TensorData::new(gumbel, [b, len, k]), &device);
+    let soft = burn::tensor::activation::softmax((l.logits.clone() + g) / tau.max(1e-3), 2);
+    let w = l.weight.clone().reshape([b, len, 1]);
+    let onehot = l.targets.clone().one_hot::<3>(k).float();
+    let base = soft * w.clone() + onehot * (w.neg() + 1.0);
+    let idx = Tensor::<3, Int>::from_data(TensorData::new(indices.to_vec(), [b, len, q]), &device);
+    let motion = vq.decoder.forward(vq.soft_codes(base, idx));
+    mmr.loss(motion, music)
+}
+
 /// The music of `[B, T'·fpt, 35]` frames as `[B, T', fpt·35]` per-token features.
 pub fn music_tokens(music: Tensor<3>, frames_per_token: usize) -> Tensor<3> {
     let [b, f, d] = music.dims();
@@ -55,6 +92,12 @@ pub struct GeneratorLoss {
     pub masked: Tensor<1>,
     /// Zero for a one-level quantizer.
     pub residual: Tensor<1>,
+    /// The masked transformer's logits `[B, L, K]` on the corrupted input, …
+    pub logits: Tensor<3>,
+    /// … where the loss was taken (`[B, L]`, 1 = corrupted position) …
+    pub weight: Tensor<2>,
+    /// … and the true base codes `[B, L]` (for the training-time MMR loss).
+    pub targets: Tensor<2, Int>,
 }
 
 impl PartGenerator {
@@ -82,7 +125,7 @@ impl PartGenerator {
         let logits = self
             .masked
             .forward_with(input, cond.clip.clone(), cond.frames.clone());
-        let masked = masked_cross_entropy(logits, target, weight);
+        let masked = masked_cross_entropy(logits.clone(), target.clone(), weight.clone());
         let residual = match &self.residual {
             Some(r) => {
                 let level = 1 + (rng.next_f64() * (q - 1) as f64) as usize % (q - 1);
@@ -100,6 +143,9 @@ impl PartGenerator {
             total: masked.clone() + residual.clone(),
             masked,
             residual,
+            logits,
+            weight,
+            targets: target,
         }
     }
 }

@@ -135,6 +135,20 @@ fn three_runs_make_a_model_that_dances_longer_than_one_window() {
             .contains("masked_ce,residual_ce"),
         "{log}"
     );
+    // With SoulNet's training-time MMR loss: logged, finite, positive.
+    let with_mmr = gen_model.replace("mmr = \"mmr\"\n", "mmr = \"mmr\"\nmmr_loss_weight = 0.5\n");
+    assert_ne!(with_mmr, gen_model);
+    train(dir, "gen_mmr", 32, &with_mmr);
+    let log = std::fs::read_to_string(dir.join("gen_mmr/log.csv")).unwrap();
+    let head: Vec<&str> = log.lines().next().unwrap().split(',').collect();
+    let col = head
+        .iter()
+        .position(|&h| h == "mmr")
+        .expect("an mmr column");
+    for line in log.lines().skip(1) {
+        let v: f64 = line.split(',').nth(col).unwrap().parse().unwrap();
+        assert!(v.is_finite() && v > 0.0, "{log}");
+    }
 
     let out = dir.join("model");
     assemble_holistic_bundle(

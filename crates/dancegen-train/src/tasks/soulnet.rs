@@ -16,13 +16,14 @@
 
 use std::path::{Path, PathBuf};
 
+use dancegen_nn::burn::module::Module;
 use dancegen_nn::burn::tensor::{Device, Tensor};
 use dancegen_nn::device;
 use dancegen_nn::part_autoencoder::PartAutoencoder;
 use dancegen_nn::retrieval::MusicMotionRetrieval;
 use dancegen_nn::weights::{self, Layout};
 use dancegen_soulnet::config::{GeneratorTable, MmrTable};
-use dancegen_soulnet::generator::{Condition, PartGenerator, music_tokens};
+use dancegen_soulnet::generator::{Condition, PartGenerator, mmr_alignment_loss, music_tokens};
 use dancegen_soulnet::layout::MUSIC_DIMS;
 use serde::{Deserialize, Serialize};
 
@@ -185,6 +186,13 @@ pub struct MagmTable {
     pub mmr: PathBuf,
     #[serde(default)]
     pub generator: GeneratorTable,
+    /// Weight of SoulNet's training-time MMR alignment loss (its code: 0.5; 0 = off).
+    #[serde(default)]
+    pub mmr_loss_weight: f64,
+    /// Gumbel-softmax temperature of that loss's token draws (the paper anneals it, the code
+    /// uses 0.01; ours: 0.5).
+    #[serde(default = "d_gumbel_tau")]
+    pub mmr_gumbel_tau: f64,
     /// Filled from the two runs when the task is built (whatever a config says here is
     /// replaced), so the run's `model.toml` records what the generator was trained on and the
     /// bundle can check it.
@@ -192,6 +200,10 @@ pub struct MagmTable {
     pub vq_table: Option<VqTable>,
     #[serde(default)]
     pub mmr_table: Option<MmrTable>,
+}
+
+fn d_gumbel_tau() -> f64 {
+    0.5
 }
 
 /// A finished run's `[config]` table and weights, loaded onto `device`.
@@ -215,6 +227,9 @@ pub struct SoulnetMagmTask {
     pub table: MagmTable,
     vq: PartAutoencoder,
     mmr: MusicMotionRetrieval,
+    /// Frozen copies on the training device for the MMR loss (gradients flow through them to
+    /// the generator, never into them); the MMR without dropout.
+    aligned: Option<(PartAutoencoder, MusicMotionRetrieval)>,
 }
 
 impl SoulnetMagmTask {
@@ -244,9 +259,29 @@ impl SoulnetMagmTask {
                 config.data.window
             ));
         }
+        if !(table.mmr_loss_weight >= 0.0 && table.mmr_gumbel_tau > 0.0) {
+            return Err("[model] mmr_loss_weight must be ≥ 0 and mmr_gumbel_tau > 0".into());
+        }
+        let aligned = if table.mmr_loss_weight > 0.0 {
+            let tdev = device::training();
+            let (_, v) = load_run(&table.vq, KIND, |t: &VqTable| t.autoencoder().init(&tdev))?;
+            let (_, m) = load_run(&table.mmr, MMR, |t: &MmrTable| {
+                let mut t = t.clone();
+                t.dropout = 0.0;
+                t.retrieval().init(&tdev)
+            })?;
+            Some((v.no_grad(), m.no_grad()))
+        } else {
+            None
+        };
         table.vq_table = Some(vq_table);
         table.mmr_table = Some(mmr_table);
-        Ok(Self { table, vq, mmr })
+        Ok(Self {
+            table,
+            vq,
+            mmr,
+            aligned,
+        })
     }
 
     fn vq_table(&self) -> &VqTable {
@@ -298,10 +333,26 @@ impl TrainTask for SoulnetMagmTask {
             batch.seed,
             &device,
         );
-        Losses {
-            total: l.total,
-            parts: vec![("masked_ce", l.masked), ("residual_ce", l.residual)],
+        let mut parts = vec![
+            ("masked_ce", l.masked.clone()),
+            ("residual_ce", l.residual.clone()),
+        ];
+        let mut total = l.total.clone();
+        if let Some((vq, mmr)) = &self.aligned {
+            let a = mmr_alignment_loss(
+                &l,
+                &ids,
+                dims,
+                vq,
+                mmr,
+                batch_music(batch),
+                self.table.mmr_gumbel_tau,
+                batch.seed ^ 0x4D4D_52,
+            );
+            total = total + a.clone() * self.table.mmr_loss_weight;
+            parts.push(("mmr", a));
         }
+        Losses { total, parts }
     }
 
     fn model_config(&self) -> toml::Table {
