@@ -69,6 +69,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
             bail!("--leader makes a duet; the holistic system dances alone")
         }
         ("holistic", None) => SystemRequest::Holistic(HolisticOptions {
+            foot_lock: !args.no_foot_lock,
             flame_mapping: args.flame_mapping.clone(),
         }),
         (other, _) => bail!("--system {other} is not wired into this command yet"),

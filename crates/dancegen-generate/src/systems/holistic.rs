@@ -6,9 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
+use dancegen_lodgepp::planted_feet::clean_planted_feet;
 use dancegen_motion::face::{FaceWeights, flame::FlameMapping};
-use dancegen_motion::repr::SmplMotion;
 use dancegen_motion::repr::motion::GroundMode;
+use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_motion::skeleton::Skeleton;
 use dancegen_nn::burn::tensor::Device;
 use dancegen_soulnet::bundle::HolisticModel;
@@ -23,13 +24,26 @@ use crate::systems::solo::keep_feet_above_floor;
 /// Shortest music the model dances to.
 pub const MIN_SONG_SECONDS: f64 = 2.0;
 
-/// Holistic options beyond [`CommonOptions`].
-#[derive(Clone, Debug, Default)]
+/// Holistic options beyond [`CommonOptions`]; the defaults are the shipped system.
+#[derive(Clone, Debug)]
 pub struct HolisticOptions {
+    /// Planted feet stay put: the solo system's root lock and leg IK on the body
+    /// (`dancegen_lodgepp::planted_feet`; post-processing, not part of SoulNet). Without it the
+    /// held-out dances skate in 82 % of frames against the real 18 % (docs/holistic-eval.md).
+    pub foot_lock: bool,
     /// A user's `(52, 103)` ARKit → FLAME mapping (`.npy`): the dance's face is then also given
     /// as FLAME's 100 expression + 3 jaw values (`.json` key `"flame"`). FLAME and SoulNet's
     /// mapping are not redistributable, so none is shipped.
     pub flame_mapping: Option<PathBuf>,
+}
+
+impl Default for HolisticOptions {
+    fn default() -> Self {
+        HolisticOptions {
+            foot_lock: true,
+            flame_mapping: None,
+        }
+    }
 }
 
 pub struct Holistic;
@@ -112,6 +126,20 @@ impl DanceSystem for Holistic {
             trans: hol.trans.clone(),
         };
         let gen_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
+        let mut notes = vec![
+            "the fingers and face were learned from synthetic data (see the model card)".into(),
+        ];
+        if input.options.foot_lock {
+            // Through EDGE-151 frames (their contact channel: EDGE's velocity labels), as the
+            // group system does; only the body's joints and root change.
+            let mut frames = Edge151::encode(&body).map_err(|e| gen_err(&e))?;
+            clean_planted_feet(&mut frames);
+            body = Edge151::decode(&frames).map_err(|e| gen_err(&e))?;
+            for f in 0..t {
+                hol.poses[f * 156..f * 156 + 66].copy_from_slice(&body.poses[f * 72..f * 72 + 66]);
+            }
+            notes.push("planted feet locked (post-processing, not part of SoulNet)".into());
+        }
         body.put_on_ground_with(GroundMode::SupportFeet)
             .map_err(|e| gen_err(&e))?;
         keep_feet_above_floor(&mut body).map_err(GenerateError::Generation)?;
@@ -138,9 +166,7 @@ impl DanceSystem for Holistic {
                 made.windows,
             ),
             timing_breakdown: String::new(),
-            notes: vec![
-                "the fingers and face were learned from synthetic data (see the model card)".into(),
-            ],
+            notes,
             group: None,
             holistic: Some(HolisticParts {
                 poses: hol.poses,
