@@ -36,10 +36,10 @@ const WINDOW: usize = 128;
 const SEGMENT: usize = 30;
 
 fn held_out(dataset: &Path) -> Result<Vec<Clip>, String> {
-    let h = dataset.join("held_out");
+    let h = std::path::absolute(dataset.join("held_out")).map_err(|e| e.to_string())?;
     let text = format!(
         "[run]\ndir = \"/tmp/unused\"\nsteps = 1\n[data]\npaths = [\"{m}\"]\nholistic = \"{hol}\"\n\
-         representation = \"holistic\"\nwindow = 64\n[data.music]\ndir = \"{mu}\"\ndims = {MUSIC_DIMS}\n\
+         representation = \"holistic\"\nwindow = 64\nstride = 64\nbatch_size = 1\n[data.music]\ndir = \"{mu}\"\ndims = {MUSIC_DIMS}\n\
          [model]\nkind = \"{KIND}\"\n[optimizer]\nkind = \"adamw\"\nlr = 1e-3\n",
         m = h.join("motion").display(),
         hol = h.join("holistic").display(),
@@ -62,7 +62,7 @@ fn embed(enc: &SequenceEncoder, rows: &[f32], dims: usize, dev: &Device) -> Vec<
     enc.forward(x, None)
         .into_data()
         .convert::<f32>()
-        .to_vec::<f32>()
+        .try_to_vec::<f32>()
         .unwrap()
 }
 
