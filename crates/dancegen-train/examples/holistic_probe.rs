@@ -10,8 +10,10 @@
 //!   clips, per part: root-relative body joint error (real motion), finger joint error relative to
 //!   the wrist and ARKit weight error (synthetic hands and face), in data units.
 //!
+//! ```text
 //!     cargo run --release -p dancegen-train --example holistic_probe -- mmr models/soulnet-small target/datasets/holistic
 //!     cargo run --release -p dancegen-train --example holistic_probe -- recon target/datasets/holistic target/runs/soulnet_small_vq ...
+//! ```
 
 use std::path::{Path, PathBuf};
 
@@ -71,7 +73,8 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
     let model = HolisticModel::load(model_dir, &dev).map_err(|e| e.to_string())?;
     let clips = held_out(dataset)?;
     let (mut zm, mut za) = (Vec::new(), Vec::new());
-    let mut seqs: Vec<(Vec<Vec<f32>>, Vec<Vec<f32>>, Vec<Vec<f32>>)> = Vec::new();
+    // Per clip: motion and music latents of its 1-s segments, and the whole clip's music.
+    let mut seqs: Vec<[Vec<Vec<f32>>; 3]> = Vec::new();
     for c in &clips {
         let mut motion = c.motion.clone();
         model.norm.transform(&mut motion);
@@ -96,19 +99,19 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
             MUSIC_DIMS,
             &dev,
         )];
-        seqs.push((segm, sega, whole));
+        seqs.push([segm, sega, whole]);
     }
     let ranks = retrieval_ranks(&zm, &za);
     let paper: Vec<SequenceLatents> = seqs
         .iter()
-        .map(|(m, a, _)| SequenceLatents {
+        .map(|[m, a, _]| SequenceLatents {
             motion: m,
             music: a,
         })
         .collect();
     let released: Vec<SequenceLatents> = seqs
         .iter()
-        .map(|(m, _, w)| SequenceLatents {
+        .map(|[m, _, w]| SequenceLatents {
             motion: m,
             music: w,
         })

@@ -347,7 +347,7 @@ impl TrainTask for SoulnetMagmTask {
                 mmr,
                 batch_music(batch),
                 self.table.mmr_gumbel_tau,
-                batch.seed ^ 0x4D4D_52,
+                batch.seed ^ 0x004D_4D52,
             );
             total = total + a.clone() * self.table.mmr_loss_weight;
             parts.push(("mmr", a));
