@@ -8,7 +8,8 @@
 //!   music latent per clip) of the real held-out dances;
 //! - `recon DATASET_DIR VQ_RUN...`: each part autoencoder run's reconstruction of the held-out
 //!   clips, per part: root-relative body joint error (real motion), finger joint error relative to
-//!   the wrist and ARKit weight error (synthetic hands and face), in data units.
+//!   the wrist (synthetic fingers), both from the `ric` positions (heading-canonical), and ARKit
+//!   weight error (synthetic face).
 //!
 //! ```text
 //!     cargo run --release -p dancegen-train --example holistic_probe -- mmr models/soulnet-small target/datasets/holistic
@@ -21,13 +22,13 @@ use dancegen_metrics::mmr::{
     MatchingVariant, SequenceLatents, chance_recall, matching_score, recall_at, retrieval_ranks,
 };
 use dancegen_motion::face::ARKIT_COUNT;
-use dancegen_motion::skeleton::Skeleton;
+use dancegen_motion::repr::holistic::split::{BODY_DIMS, BODY_HAND_DIMS};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::device;
 use dancegen_nn::retrieval::SequenceEncoder;
 use dancegen_nn::weights::{self, Layout};
 use dancegen_soulnet::bundle::HolisticModel;
-use dancegen_soulnet::layout::{MUSIC_DIMS, TOTAL_DIMS, decode};
+use dancegen_soulnet::layout::{MUSIC_DIMS, TOTAL_DIMS};
 use dancegen_train::data::{Clip, Normalizer, load_clips, motion_files};
 use dancegen_train::tasks::soulnet::{KIND, VqTable};
 use dancegen_train::{TrainConfig, files};
@@ -129,24 +130,27 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
     }))
 }
 
-/// Root-relative world joints `(T, 52, 3)` and face weights of normalised rows.
+/// Root-relative joint positions `(T, 52, 3)` in the heading-canonical frame (HumanML3D's
+/// `ric` channels of the split vector: body joints 1–21 at `[4, 67)`, the 30 finger joints at the
+/// start of the hands part; the root's height subtracted) and the face weights of normalised
+/// rows. Reading positions straight from `ric` keeps a drifting heading or root path (integrated
+/// velocities) out of the pose error.
 fn joints_and_face(rows: &[f32], norm: &Normalizer) -> Result<(Vec<f32>, Vec<f32>), String> {
     let mut r = rows.to_vec();
     norm.inverse(&mut r)?;
-    let d = decode(&r, 30.0)?;
-    let mut j = d
-        .motion
-        .joints_world_with(&Skeleton::smplh52_approx())
-        .map_err(|e| e.to_string())?;
-    for f in j.chunks_exact_mut(52 * 3) {
-        let root = [f[0], f[1], f[2]];
-        for p in f.chunks_exact_mut(3) {
-            for k in 0..3 {
-                p[k] -= root[k];
-            }
+    let (mut j, mut face) = (Vec::new(), Vec::new());
+    for row in r.chunks_exact(TOTAL_DIMS) {
+        let root_y = row[3];
+        j.extend_from_slice(&[0.0, 0.0, 0.0]);
+        let ric = row[4..4 + 21 * 3]
+            .iter()
+            .chain(&row[BODY_DIMS..BODY_DIMS + 30 * 3]);
+        for (k, v) in ric.enumerate() {
+            j.push(if k % 3 == 1 { v - root_y } else { *v });
         }
+        face.extend(row[BODY_HAND_DIMS..].iter().map(|v| v.clamp(0.0, 1.0)));
     }
-    Ok((j, d.face))
+    Ok((j, face))
 }
 
 fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> {
