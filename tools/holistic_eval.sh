@@ -372,6 +372,15 @@ probe() { # name args...
 }
 if [ "$DRY" = 0 ]; then
     probe mmr mmr "$MODEL" "$DATASET"
+    # The matching score of generated dances, judged by the shipped model's MMR (both MMR-loss
+    # generators share it): the shipped model's segments and each comparison set, per seed.
+    for seed in $SEEDS; do
+        probe "mmr_gen_seed$seed" mmr-gen "$MODEL" "$DATASET" "$OUT/gen/seed$seed"
+        for entry in "${MMR_SETS[@]}"; do
+            name=${entry%%=*}
+            probe "mmr_gen_${name}_seed$seed" mmr-gen "$MODEL" "$DATASET" "$OUT/mmr/gen/$name/seed$seed"
+        done
+    done
 else
     echo "dry run: no model" > "$OUT/probe/mmr.err"
 fi

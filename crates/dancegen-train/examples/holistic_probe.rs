@@ -6,6 +6,10 @@
 //!   non-overlapping 128-frame windows (R@1, R@3 against chance, Euclidean like the metric code)
 //!   and the MMR-Matching Score (Eq. 8 over 1-s segments, and the released code's variant with one
 //!   music latent per clip) of the real held-out dances;
+//! - `mmr-gen MODEL_DIR DATASET_DIR GEN_DIR`: the MMR-Matching Score (both variants) of
+//!   generated dances, `GEN_DIR/<held-out clip>.json` as `dancegen generate -o X.json` writes them
+//!   (SMPL-H rotations, pelvis path, face), against the clip's music features — the measure the
+//!   training-time MMR loss is meant to lower;
 //! - `recon DATASET_DIR VQ_RUN...`: each part autoencoder run's reconstruction of the held-out
 //!   clips, per part: root-relative body joint error (real motion), finger joint error relative to
 //!   the wrist (synthetic fingers), both from the `ric` positions (heading-canonical), and ARKit
@@ -130,6 +134,101 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
     }))
 }
 
+/// The MMR-Matching Score of generated dances (see the module documentation).
+fn mmr_gen(model_dir: &Path, dataset: &Path, gen_dir: &Path) -> Result<serde_json::Value, String> {
+    use dancegen_motion::repr::holistic::{Holistic623, split};
+    let dev = device::inference();
+    let model = HolisticModel::load(model_dir, &dev).map_err(|e| e.to_string())?;
+    let h = std::path::absolute(dataset.join("held_out")).map_err(|e| e.to_string())?;
+    let flat = |v: &serde_json::Value, key: &str, path: &Path| -> Result<Vec<f32>, String> {
+        fn walk(v: &serde_json::Value, out: &mut Vec<f32>) {
+            match v {
+                serde_json::Value::Array(a) => a.iter().for_each(|x| walk(x, out)),
+                serde_json::Value::Number(n) => out.push(n.as_f64().unwrap_or(f64::NAN) as f32),
+                _ => {}
+            }
+        }
+        let mut out = Vec::new();
+        walk(
+            v.pointer(key)
+                .ok_or_else(|| format!("{}: no {key}", path.display()))?,
+            &mut out,
+        );
+        Ok(out)
+    };
+    let mut seqs: Vec<[Vec<Vec<f32>>; 3]> = Vec::new();
+    let mut stems = Vec::new();
+    for entry in std::fs::read_dir(h.join("music")).map_err(|e| e.to_string())? {
+        let music_path = entry.map_err(|e| e.to_string())?.path();
+        let stem = music_path
+            .file_stem()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let json_path = gen_dir.join(format!("{stem}.json"));
+        if !json_path.is_file() {
+            continue;
+        }
+        let text = std::fs::read_to_string(&json_path).map_err(|e| e.to_string())?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+        let poses = flat(&v, "/smplh_poses_axis_angle", &json_path)?;
+        let trans = flat(&v, "/pelvis_trans", &json_path)?;
+        let face = flat(&v, "/face/weights", &json_path)?;
+        let inter = Holistic623::encode(&poses, &trans, 30.0).map_err(|e| e.to_string())?;
+        let body_hands = split::to_split(&inter, 0).map_err(|e| e.to_string())?;
+        let mut motion = Vec::new();
+        for (f, row) in body_hands.chunks_exact(BODY_HAND_DIMS).enumerate() {
+            motion.extend_from_slice(row);
+            motion.extend_from_slice(&face[f * ARKIT_COUNT..(f + 1) * ARKIT_COUNT]);
+        }
+        model.norm.transform(&mut motion);
+        let music = dancegen_io::read_npy(&music_path).map_err(|e| e.to_string())?;
+        let music: Vec<f32> = music.data.iter().map(|&x| x as f32).collect();
+        let frames = (motion.len() / TOTAL_DIMS).min(music.len() / MUSIC_DIMS);
+        let (mut segm, mut sega) = (Vec::new(), Vec::new());
+        for s in (0..frames.saturating_sub(SEGMENT - 1)).step_by(SEGMENT) {
+            let m = &motion[s * TOTAL_DIMS..(s + SEGMENT) * TOTAL_DIMS];
+            let a = &music[s * MUSIC_DIMS..(s + SEGMENT) * MUSIC_DIMS];
+            segm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
+            sega.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
+        }
+        let whole = vec![embed(
+            &model.mmr.music,
+            &music[..frames * MUSIC_DIMS],
+            MUSIC_DIMS,
+            &dev,
+        )];
+        seqs.push([segm, sega, whole]);
+        stems.push(stem);
+    }
+    if seqs.is_empty() {
+        return Err(format!(
+            "{}: no generated .json of a held-out clip",
+            gen_dir.display()
+        ));
+    }
+    stems.sort();
+    let paper: Vec<SequenceLatents> = seqs
+        .iter()
+        .map(|[m, a, _]| SequenceLatents {
+            motion: m,
+            music: a,
+        })
+        .collect();
+    let released: Vec<SequenceLatents> = seqs
+        .iter()
+        .map(|[m, _, w]| SequenceLatents {
+            motion: m,
+            music: w,
+        })
+        .collect();
+    Ok(serde_json::json!({
+        "clips": stems,
+        "matching_score_eq8": matching_score(&paper, MatchingVariant::Paper),
+        "matching_score_released_code": matching_score(&released, MatchingVariant::ReleasedCode),
+    }))
+}
+
 /// Root-relative joint positions `(T, 52, 3)` in the heading-canonical frame (HumanML3D's
 /// `ric` channels of the split vector: body joints 1–21 at `[4, 67)`, the 30 finger joints at the
 /// start of the hands part; the root's height subtracted) and the face weights of normalised
@@ -226,12 +325,17 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("mmr") if args.len() == 3 => mmr(Path::new(&args[1]), Path::new(&args[2])),
+        Some("mmr-gen") if args.len() == 4 => mmr_gen(
+            Path::new(&args[1]),
+            Path::new(&args[2]),
+            Path::new(&args[3]),
+        ),
         Some("recon") if args.len() >= 3 => recon(
             Path::new(&args[1]),
             &args[2..].iter().map(PathBuf::from).collect::<Vec<_>>(),
         ),
         _ => Err(
-            "usage: holistic_probe mmr MODEL_DIR DATASET_DIR | recon DATASET_DIR VQ_RUN...".into(),
+            "usage: holistic_probe mmr MODEL_DIR DATASET_DIR | mmr-gen MODEL_DIR DATASET_DIR GEN_DIR | recon DATASET_DIR VQ_RUN...".into(),
         ),
     };
     match result {
