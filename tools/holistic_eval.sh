@@ -399,6 +399,9 @@ for v in SEEDS GUIDANCES LONG; do
     default=$(case $v in SEEDS) echo "0 1 2";; GUIDANCES) echo "1 2 4 6";; LONG) echo 1;; esac)
     [ "${!v}" != "$default" ] && CMD="$v=\"${!v}\" $CMD"
 done
+if [ -n "$MMR_LOSS_MODEL" ]; then
+    CMD="MMR_LOSS_MODEL=$(realpath --relative-to="$ROOT" "$MMR_LOSS_MODEL") MMR_BASE_MODEL=$(realpath --relative-to="$ROOT" "$MMR_BASE_MODEL") $CMD"
+fi
 rel() { # relative to the repository, unless that climbs more than one level
     local r
     r=$(realpath --relative-to="$ROOT" "$1" 2>/dev/null) || { echo "$1"; return; }
