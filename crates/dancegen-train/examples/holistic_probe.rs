@@ -91,20 +91,7 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
             zm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
             za.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
         }
-        let (mut segm, mut sega) = (Vec::new(), Vec::new());
-        for s in (0..frames.saturating_sub(SEGMENT - 1)).step_by(SEGMENT) {
-            let m = &motion[s * TOTAL_DIMS..(s + SEGMENT) * TOTAL_DIMS];
-            let a = &music[s * MUSIC_DIMS..(s + SEGMENT) * MUSIC_DIMS];
-            segm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
-            sega.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
-        }
-        let whole = vec![embed(
-            &model.mmr.music,
-            &music[..frames * MUSIC_DIMS],
-            MUSIC_DIMS,
-            &dev,
-        )];
-        seqs.push([segm, sega, whole]);
+        seqs.push(sequence_latents(&model, &motion, music, frames, &dev));
     }
     let ranks = retrieval_ranks(&zm, &za);
     let paper: Vec<SequenceLatents> = seqs
@@ -132,6 +119,31 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
         "matching_score_eq8": matching_score(&paper, MatchingVariant::Paper),
         "matching_score_released_code": matching_score(&released, MatchingVariant::ReleasedCode),
     }))
+}
+
+/// One clip's MMR latents for the matching score: motion and music per 1-s segment, and the
+/// whole clip's music (`motion` normalised, `frames` long).
+fn sequence_latents(
+    model: &HolisticModel,
+    motion: &[f32],
+    music: &[f32],
+    frames: usize,
+    dev: &Device,
+) -> [Vec<Vec<f32>>; 3] {
+    let (mut segm, mut sega) = (Vec::new(), Vec::new());
+    for s in (0..frames.saturating_sub(SEGMENT - 1)).step_by(SEGMENT) {
+        let m = &motion[s * TOTAL_DIMS..(s + SEGMENT) * TOTAL_DIMS];
+        let a = &music[s * MUSIC_DIMS..(s + SEGMENT) * MUSIC_DIMS];
+        segm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, dev));
+        sega.push(embed(&model.mmr.music, a, MUSIC_DIMS, dev));
+    }
+    let whole = vec![embed(
+        &model.mmr.music,
+        &music[..frames * MUSIC_DIMS],
+        MUSIC_DIMS,
+        dev,
+    )];
+    [segm, sega, whole]
 }
 
 /// The MMR-Matching Score of generated dances (see the module documentation).
@@ -185,20 +197,7 @@ fn mmr_gen(model_dir: &Path, dataset: &Path, gen_dir: &Path) -> Result<serde_jso
         let music = dancegen_io::read_npy(&music_path).map_err(|e| e.to_string())?;
         let music: Vec<f32> = music.data.iter().map(|&x| x as f32).collect();
         let frames = (motion.len() / TOTAL_DIMS).min(music.len() / MUSIC_DIMS);
-        let (mut segm, mut sega) = (Vec::new(), Vec::new());
-        for s in (0..frames.saturating_sub(SEGMENT - 1)).step_by(SEGMENT) {
-            let m = &motion[s * TOTAL_DIMS..(s + SEGMENT) * TOTAL_DIMS];
-            let a = &music[s * MUSIC_DIMS..(s + SEGMENT) * MUSIC_DIMS];
-            segm.push(embed(&model.mmr.motion, m, TOTAL_DIMS, &dev));
-            sega.push(embed(&model.mmr.music, a, MUSIC_DIMS, &dev));
-        }
-        let whole = vec![embed(
-            &model.mmr.music,
-            &music[..frames * MUSIC_DIMS],
-            MUSIC_DIMS,
-            &dev,
-        )];
-        seqs.push([segm, sega, whole]);
+        seqs.push(sequence_latents(&model, &motion, &music, frames, &dev));
         stems.push(stem);
     }
     if seqs.is_empty() {
