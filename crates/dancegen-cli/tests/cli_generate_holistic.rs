@@ -58,6 +58,8 @@ fn a_holistic_dance_has_fingers_and_a_face_in_every_file() {
     let d: Vec<f64> = (0..360).map(|f| dist(f, 24, 20)).collect();
     let spread =
         d.iter().cloned().fold(f64::MIN, f64::max) - d.iter().cloned().fold(f64::MAX, f64::min);
+    // Frozen fingers give 0 (up to float noise); the shipped model's held-out dances spread it
+    // by 2.8-7.2 cm (target/holistic-eval/gen, seeds 0-1), so 2 mm leaves a wide margin.
     assert!(spread > 0.002, "finger-to-wrist distance spread {spread} m");
     // Feet on or above the floor.
     for f in 0..360 {
@@ -89,6 +91,8 @@ fn a_holistic_dance_has_fingers_and_a_face_in_every_file() {
             (col.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 360.0).sqrt()
         })
         .fold(0.0, f64::max);
+    // A constant face gives 0; the shipped model's most-moving weight has std 0.054 on a
+    // held-out clip (seed 0), the synthetic data's mean 0.031.
     assert!(std_max > 0.01, "face weights nearly constant ({std_max})");
 
     let csv =

@@ -77,6 +77,26 @@ pub struct CommonOptions {
     pub end: Option<f64>,
 }
 
+impl CommonOptions {
+    /// `--guidance` non-negative and finite, `--steps` at least 1; `default` completes the
+    /// guidance hint (e.g. "2 = Lodge's default").
+    pub fn check_sampling(&self, default: &str) -> Result<(), crate::GenerateError> {
+        if let Some(w) = self.guidance
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(crate::GenerateError::Invalid(format!(
+                "--guidance {w}: use a non-negative number (1 = no guidance, {default})"
+            )));
+        }
+        if self.steps == Some(0) {
+            return Err(crate::GenerateError::Invalid(
+                "--steps must be at least 1".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Which dancers an output file holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DancerSelection {

@@ -103,34 +103,8 @@ pub struct BundleConfig {
     pub sampling: SamplingDefaults,
 }
 
-/// `normalizer.json` as `dancegen train` writes it (`kind = "mean_std"`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct MeanStd {
-    pub kind: String,
-    pub mean: Vec<f64>,
-    pub std: Vec<f64>,
-}
-
-impl MeanStd {
-    pub fn load(path: &Path) -> Result<Self, BundleError> {
-        let text = std::fs::read_to_string(path).map_err(|e| BundleError::io(path, e))?;
-        let m: MeanStd = serde_json::from_str(&text).map_err(|e| BundleError::Invalid {
-            path: path.to_path_buf(),
-            reason: format!("not a normaliser: {e}"),
-        })?;
-        if m.kind != "mean_std" || m.mean.len() != DIMS || m.std.len() != DIMS {
-            return Err(BundleError::Invalid {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "expected a 151-dim mean_std normaliser, got {} with {} dims",
-                    m.kind,
-                    m.mean.len()
-                ),
-            });
-        }
-        Ok(m)
-    }
-}
+/// `normalizer.json` / `vqvae_normalizer.json` (mean / std of the 151 EDGE channels).
+pub use dancegen_motion::repr::normalizer::MeanStdNormalizer as MeanStd;
 
 /// What can go wrong reading a bundle (always names the file).
 #[derive(Debug, thiserror::Error)]
@@ -222,8 +196,15 @@ impl SoloModel {
             Layout::Burn,
         )
         .map_err(wload_err(gp))?;
-        let norm = MeanStd::load(&need(files::NORMALIZER)?)?;
-        let vqvae_norm = MeanStd::load(&need(files::VQVAE_NORMALIZER)?)?;
+        let load_norm = |name: &str| -> Result<MeanStd, BundleError> {
+            let p = need(name)?;
+            MeanStd::load(&p, DIMS).map_err(|e| BundleError::Invalid {
+                path: p.clone(),
+                reason: e.to_string(),
+            })
+        };
+        let norm = load_norm(files::NORMALIZER)?;
+        let vqvae_norm = load_norm(files::VQVAE_NORMALIZER)?;
         let pp = need(files::PDDM)?;
         let mut table = config.pddm.clone();
         table.genres = config.genres.clone();

@@ -49,13 +49,8 @@ pub struct BundleConfig {
     pub sampling: SamplingDefaults,
 }
 
-/// `normalizer.json` as `dancegen train` writes it (`kind = "mean_std"`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct MeanStd {
-    pub kind: String,
-    pub mean: Vec<f64>,
-    pub std: Vec<f64>,
-}
+/// `normalizer.json` (mean / std of the 371 training channels).
+pub use dancegen_motion::repr::normalizer::MeanStdNormalizer as MeanStd;
 
 /// What can go wrong reading a bundle (always names the file).
 #[derive(Debug, thiserror::Error)]
@@ -69,25 +64,6 @@ fn invalid(path: &Path, reason: impl ToString) -> BundleError {
     BundleError {
         path: path.to_path_buf(),
         reason: reason.to_string(),
-    }
-}
-
-impl MeanStd {
-    pub fn load(path: &Path) -> Result<Self, BundleError> {
-        let text = std::fs::read_to_string(path).map_err(|e| invalid(path, e))?;
-        let m: MeanStd = serde_json::from_str(&text)
-            .map_err(|e| invalid(path, format!("not a normaliser: {e}")))?;
-        if m.kind != "mean_std" || m.mean.len() != PAIR_DIMS || m.std.len() != PAIR_DIMS {
-            return Err(invalid(
-                path,
-                format!(
-                    "expected a {PAIR_DIMS}-dim mean_std normaliser, got {} with {} dims",
-                    m.kind,
-                    m.mean.len()
-                ),
-            ));
-        }
-        Ok(m)
     }
 }
 
@@ -143,7 +119,8 @@ impl DuetModel {
             Layout::Burn,
         )
         .map_err(|e| invalid(&dp, e))?;
-        let norm = MeanStd::load(&need(files::NORMALIZER)?)?;
+        let np = need(files::NORMALIZER)?;
+        let norm = MeanStd::load(&np, PAIR_DIMS).map_err(|e| invalid(&np, e))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             config,

@@ -83,13 +83,8 @@ impl BundleConfig {
     }
 }
 
-/// `normalizer.json` as `dancegen train` writes it (`kind = "mean_std"`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct MeanStd {
-    pub kind: String,
-    pub mean: Vec<f64>,
-    pub std: Vec<f64>,
-}
+/// `normalizer.json` (the mean / std of the 675 training values).
+pub use dancegen_motion::repr::normalizer::MeanStdNormalizer as MeanStd;
 
 /// What can go wrong reading a bundle (always names the file).
 #[derive(Debug, thiserror::Error)]
@@ -103,41 +98,6 @@ fn invalid(path: &Path, reason: impl ToString) -> BundleError {
     BundleError {
         path: path.to_path_buf(),
         reason: reason.to_string(),
-    }
-}
-
-impl MeanStd {
-    pub fn load(path: &Path) -> Result<Self, BundleError> {
-        let text = std::fs::read_to_string(path).map_err(|e| invalid(path, e))?;
-        let m: MeanStd = serde_json::from_str(&text)
-            .map_err(|e| invalid(path, format!("not a normaliser: {e}")))?;
-        if m.kind != "mean_std" || m.mean.len() != TOTAL_DIMS || m.std.len() != TOTAL_DIMS {
-            return Err(invalid(
-                path,
-                format!(
-                    "expected a {TOTAL_DIMS}-value mean_std normaliser, got {} with {} values",
-                    m.kind,
-                    m.mean.len()
-                ),
-            ));
-        }
-        Ok(m)
-    }
-
-    /// Normalised → data units, in place.
-    pub fn inverse(&self, x: &mut [f32]) {
-        let d = self.mean.len();
-        for (i, v) in x.iter_mut().enumerate() {
-            *v = (f64::from(*v) * self.std[i % d] + self.mean[i % d]) as f32;
-        }
-    }
-
-    /// Data units → normalised, in place.
-    pub fn transform(&self, x: &mut [f32]) {
-        let d = self.mean.len();
-        for (i, v) in x.iter_mut().enumerate() {
-            *v = ((f64::from(*v) - self.mean[i % d]) / self.std[i % d]) as f32;
-        }
     }
 }
 
@@ -179,7 +139,8 @@ impl HolisticModel {
         let gp = need(files::GENERATOR)?;
         let generator = weights::load(config.init_generator(device), &gp, Layout::Burn)
             .map_err(|e| invalid(&gp, e))?;
-        let norm = MeanStd::load(&need(files::NORMALIZER)?)?;
+        let np = need(files::NORMALIZER)?;
+        let norm = MeanStd::load(&np, TOTAL_DIMS).map_err(|e| invalid(&np, e))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             config,

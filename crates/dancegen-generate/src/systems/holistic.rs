@@ -70,16 +70,7 @@ impl DanceSystem for Holistic {
         common: &CommonOptions,
         options: &HolisticOptions,
     ) -> Result<(), GenerateError> {
-        if let Some(w) = common.guidance
-            && !(w.is_finite() && w >= 0.0)
-        {
-            return Err(GenerateError::Invalid(format!(
-                "--guidance {w}: use a non-negative number (1 = no guidance, 4 = SoulNet's)"
-            )));
-        }
-        if common.steps == Some(0) {
-            return Err(GenerateError::Invalid("--steps must be at least 1".into()));
-        }
+        common.check_sampling("4 = SoulNet's")?;
         if let Some(g) = &common.genre {
             return Err(GenerateError::Invalid(format!(
                 "--genre {g}: the holistic model has no genres (it dances to the music alone)"

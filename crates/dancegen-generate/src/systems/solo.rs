@@ -84,16 +84,7 @@ impl DanceSystem for Solo {
         common: &CommonOptions,
         _: &SoloOptions,
     ) -> Result<(), GenerateError> {
-        if let Some(w) = common.guidance
-            && !(w.is_finite() && w >= 0.0)
-        {
-            return Err(GenerateError::Invalid(format!(
-                "--guidance {w}: use a non-negative number (1 = no guidance, 2 = Lodge's default)"
-            )));
-        }
-        if common.steps == Some(0) {
-            return Err(GenerateError::Invalid("--steps must be at least 1".into()));
-        }
+        common.check_sampling("2 = Lodge's default")?;
         genre(model, common).map(|_| ())
     }
 

@@ -131,3 +131,74 @@ impl MinMaxNormalizer {
         Ok(n)
     }
 }
+
+/// A per-dimension mean / std normaliser as `dancegen train` writes it (`normalizer.json`,
+/// `{"kind": "mean_std", "mean": [...], "std": [...]}`): `x' = (x − mean) / std`. The model
+/// bundles read it through here.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeanStdNormalizer {
+    pub kind: String,
+    pub mean: Vec<f64>,
+    pub std: Vec<f64>,
+}
+
+impl MeanStdNormalizer {
+    /// Reads `path` and checks it has `dims` values. The error says what is wrong and leaves
+    /// naming the file to the caller (every bundle error names it).
+    pub fn load(path: &Path, dims: usize) -> Result<Self, ReprError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ReprError::Invalid(e.to_string()))?;
+        let m: MeanStdNormalizer = serde_json::from_str(&text)
+            .map_err(|e| ReprError::Invalid(format!("not a normaliser: {e}")))?;
+        if m.kind != "mean_std" || m.mean.len() != dims || m.std.len() != dims {
+            return Err(ReprError::Invalid(format!(
+                "expected a {dims}-dim mean_std normaliser, got {} with {} dims",
+                m.kind,
+                m.mean.len()
+            )));
+        }
+        Ok(m)
+    }
+
+    /// Data units → normalised, in place (rows of `mean.len()` values).
+    pub fn transform(&self, x: &mut [f32]) {
+        let d = self.mean.len();
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = ((f64::from(*v) - self.mean[i % d]) / self.std[i % d]) as f32;
+        }
+    }
+
+    /// Normalised → data units, in place.
+    pub fn inverse(&self, x: &mut [f32]) {
+        let d = self.mean.len();
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = (f64::from(*v) * self.std[i % d] + self.mean[i % d]) as f32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_std_reads_checks_and_round_trips() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("normalizer.json");
+        std::fs::write(
+            &p,
+            r#"{"kind":"mean_std","mean":[1.0,-2.0],"std":[2.0,0.5]}"#,
+        )
+        .unwrap();
+        let n = MeanStdNormalizer::load(&p, 2).unwrap();
+        let mut x = vec![3.0f32, -1.0, 1.0, -2.0];
+        n.transform(&mut x);
+        assert_eq!(x, vec![1.0, 2.0, 0.0, 0.0]);
+        n.inverse(&mut x);
+        assert_eq!(x, vec![3.0, -1.0, 1.0, -2.0]);
+        let e = MeanStdNormalizer::load(&p, 3).unwrap_err().to_string();
+        assert!(e.contains("3-dim") && e.contains("2 dims"), "{e}");
+        std::fs::write(&p, "[]").unwrap();
+        let e = MeanStdNormalizer::load(&p, 2).unwrap_err().to_string();
+        assert!(e.contains("not a normaliser"), "{e}");
+    }
+}
