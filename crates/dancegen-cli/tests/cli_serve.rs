@@ -255,3 +255,58 @@ fn fifty_jobs_and_a_thousand_status_requests_lose_nothing() {
         MAX_PEAK_BYTES >> 20
     );
 }
+
+/// A holistic job over loopback: the served files are the CLI's bytes for the same song and
+/// options, and they include the face as Live Link CSV and the (T, 52, 3) joints.
+#[test]
+fn a_holistic_job_serves_fingers_and_face_as_the_cli_writes_them() {
+    let _turn = ONE_SERVER_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let data = tempfile::tempdir().unwrap();
+    let server = ServeProcess::start(data.path(), &[]);
+    let r = server
+        .client
+        .submit_song(
+            &demo_song(),
+            r#"{"system": "holistic", "seed": 4, "end": 5}"#,
+        )
+        .unwrap();
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = server.client.wait(&id, JOB_TIMEOUT).unwrap();
+    assert_eq!(job["state"], "done", "{job}");
+    let files = &job["variations"][0]["files"];
+    let cli = tempfile::tempdir().unwrap();
+    let out = |ext: &str| cli.path().join(format!("d.{ext}")).display().to_string();
+    let song = demo_song();
+    let mut args = vec![
+        "generate",
+        song.to_str().unwrap(),
+        "--system",
+        "holistic",
+        "--seed",
+        "4",
+        "--end",
+        "5",
+        "-q",
+    ];
+    let outs: Vec<String> = ["npy", "json", "csv"].iter().map(|e| out(e)).collect();
+    for o in &outs {
+        args.extend(["-o", o.as_str()]);
+    }
+    ok(&dancegen(&args));
+    for ext in ["npy", "json", "csv"] {
+        let url = files[ext]
+            .as_str()
+            .unwrap_or_else(|| panic!("no .{ext} among the job's files: {job}"));
+        let served = server.client.download(url).unwrap();
+        let written = std::fs::read(out(ext)).unwrap();
+        assert!(
+            served == written,
+            "d.{ext}: the server's bytes differ from the CLI's"
+        );
+    }
+    let a = dancegen_io::read_npy(Path::new(&out("npy"))).unwrap();
+    assert_eq!(a.shape, vec![150, 52, 3]);
+}
