@@ -390,6 +390,13 @@ pub struct EvalArgs {
     /// Genre check: the genre the --pred dances were asked for.
     #[arg(long, value_name = "NAME")]
     pub want_genre: Option<String>,
+    /// Genre check: genres with fewer real --gt clips than this are left out of the classifier
+    /// (and listed under `excluded`): one clip is one performance, which leave-one-out cannot
+    /// test. 1 keeps every genre.
+    #[arg(long, value_name = "N",
+          default_value_t = dancegen_metrics::genre::MIN_CLIPS_PER_GENRE as u64,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub genre_min_clips: u64,
     /// Beat-align-score variant.
     #[arg(long, value_enum, default_value_t = BasVariantArg::Bailando)]
     pub bas_variant: BasVariantArg,

@@ -197,6 +197,70 @@ fn genre_features_follow_the_protocol() {
     assert!((share - salsa as f64 / 3.0).abs() < 1e-12, "{j}");
 }
 
+/// A genre with one real clip is one performance: by default it is left out of the classifier
+/// and reported, asking for it is refused, and `--genre-min-clips 1` brings it back.
+#[test]
+fn genres_with_one_real_clip_are_left_out_unless_asked() {
+    let set = set();
+    let gt: Vec<String> = CLIPS
+        .iter()
+        .filter(|(stem, _, _)| *stem != "85_04_neo30")
+        .map(|(stem, _, _)| s(&set.gt.join(format!("{stem}.npy"))).to_string())
+        .collect();
+    let pred = s(&set.gt.join("05_02.npy")).to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let run = |want: &str, extra: &[&str], json: &Path| {
+        let mut a: Vec<&str> = vec!["eval", "--pred", &pred, "--gt"];
+        a.extend(gt.iter().map(String::as_str));
+        a.extend([
+            "--gt-genres",
+            s(&set.manifest),
+            "--want-genre",
+            want,
+            "--metrics",
+            "genre",
+            "--fps",
+            "30",
+            "--json",
+            s(json),
+        ]);
+        a.extend(extra);
+        dancegen(&a)
+    };
+    let out = dir.path().join("default.json");
+    ok(&run("modern", &[], &out));
+    let g = &read_json(&out)["genre"];
+    assert_eq!(g["classes"], serde_json::json!({"modern": 3, "salsa": 3}));
+    assert_eq!(g["excluded"], serde_json::json!({"break": 1}));
+    assert_eq!(g["min_clips"].as_u64(), Some(2));
+    assert!((g["chance_uniform"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+    assert!(g["fid_k"].get("break").is_none(), "{g}");
+
+    let o = run("break", &[], &dir.path().join("break.json"));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("--want-genre break has 1 real --gt clip(s), fewer than --genre-min-clips 2"),
+        "{e}"
+    );
+
+    let out = dir.path().join("all.json");
+    ok(&run("modern", &["--genre-min-clips", "1"], &out));
+    let g = &read_json(&out)["genre"];
+    assert_eq!(
+        g["classes"],
+        serde_json::json!({"break": 1, "modern": 3, "salsa": 3})
+    );
+    assert_eq!(g["excluded"], serde_json::json!({}));
+
+    let o = run(
+        "modern",
+        &["--genre-min-clips", "0"],
+        &dir.path().join("zero.json"),
+    );
+    assert!(!o.status.success(), "--genre-min-clips 0 must be refused");
+}
+
 #[test]
 fn genre_input_errors_are_clear() {
     let set = set();

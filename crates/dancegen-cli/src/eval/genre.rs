@@ -4,7 +4,8 @@
 //! `--want-genre` is reported next to what it should be read against: chance (uniform and
 //! majority) and the leave-one-out accuracy on the real clips themselves. Beside it, FID_k of the
 //! `--pred` set against each genre's real clips (what `fid_k` gives with `--gt` holding only that
-//! genre's clips).
+//! genre's clips). Genres with fewer than `--genre-min-clips` real clips are left out of the
+//! classifier and reported under `excluded` (`dancegen_metrics::genre::MIN_CLIPS_PER_GENRE`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -12,7 +13,9 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use dancegen_dataset::Manifest;
 use dancegen_metrics::fid::EPS_BAILANDO;
-use dancegen_metrics::genre::{GenreClassifier, count_predictions, leave_one_out_accuracy};
+use dancegen_metrics::genre::{
+    GenreClassifier, count_predictions, keep_genres_with_at_least, leave_one_out_accuracy,
+};
 use dancegen_metrics::protocol::Protocol;
 use dancegen_metrics::{frechet_distance, normalize_by_gt};
 use serde_json::{Value, json};
@@ -26,13 +29,15 @@ pub struct GenreReport {
     pub per_clip: Vec<Vec<String>>,
 }
 
-/// Fits on `gt` (genres from the manifest at `manifest_path`) and classifies `pred`. Kinetic
-/// features are those `fid_k` uses under `protocol` (`solo::features`), one sample per dancer.
+/// Fits on `gt` (genres from the manifest at `manifest_path`; genres with fewer than
+/// `min_clips` clips left out) and classifies `pred`. Kinetic features are those `fid_k` uses
+/// under `protocol` (`solo::features`), one sample per dancer.
 pub fn check(
     pred: &[Clip],
     gt: &[Clip],
     manifest_path: &Path,
     want: &str,
+    min_clips: usize,
     protocol: &Protocol,
 ) -> Result<GenreReport> {
     let manifest = Manifest::read(manifest_path).context("--gt-genres")?;
@@ -67,6 +72,18 @@ pub fn check(
             examples.push((genre.to_string(), f));
         }
     }
+    let (examples, excluded) = keep_genres_with_at_least(examples, min_clips);
+    if let Some(n) = excluded.get(want) {
+        bail!(
+            "--want-genre {want} has {n} real --gt clip(s), fewer than --genre-min-clips {min_clips}: \
+             too few to tell whether a dance looks like it"
+        );
+    }
+    for (g, n) in &excluded {
+        tracing::warn!(
+            "genre {g} has {n} real --gt clip(s), fewer than --genre-min-clips {min_clips}: left out of the classifier"
+        );
+    }
     let mut real: Vec<&str> = examples.iter().map(|(g, _)| g.as_str()).collect();
     real.sort_unstable();
     real.dedup();
@@ -76,7 +93,10 @@ pub fn check(
             real.join(", ")
         );
     }
-    for g in known.iter().filter(|g| !real.contains(*g)) {
+    for g in known
+        .iter()
+        .filter(|g| !real.contains(*g) && !excluded.contains_key(**g))
+    {
         tracing::warn!(
             "genre {g} of {} has no --gt clip; the classifier does not know it",
             manifest_path.display()
@@ -134,6 +154,8 @@ pub fn check(
         "loo_accuracy_real": loo.accuracy(),
         "counts": counts,
         "classes": classes,
+        "excluded": excluded,
+        "min_clips": min_clips,
         "fid_k": fid_k,
     });
     Ok(GenreReport { summary, per_clip })

@@ -266,7 +266,14 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
     // Genre control: one classifier fit on the GT, every pred dancer classified.
     let genres = match (&args.gt_genres, &args.want_genre) {
         (Some(manifest), Some(want_genre)) if want("genre") => {
-            let r = genre::check(&pred, &gt, manifest, want_genre, &protocol)?;
+            let r = genre::check(
+                &pred,
+                &gt,
+                manifest,
+                want_genre,
+                args.genre_min_clips as usize,
+                &protocol,
+            )?;
             summary.insert("genre".into(), r.summary);
             Some(r.per_clip)
         }
