@@ -302,33 +302,47 @@ def cmd_report(args):
     }
 
     # ---- generated: per config, per seed (seeds whose generation failed are missing)
-    seg, lng, setm, setm_all, done = {}, {}, {}, {}, {}
-    for name, _, _, sampler in configs:
-        seg[name], lng[name], setm[name], setm_all[name], done[name] = {}, {}, {}, {}, []
-        for s in seeds:
-            ed = os.path.join(out, "eval", name, f"seed{s}")
-            fj, fa, cj = (opt_load(os.path.join(ed, f)) for f in
-                          ("fid.json", "fid_all.json", "clip.json"))
-            if fj is None or fa is None or cj is None:
-                continue
-            done[name].append(s)
-            for k in SET:
-                setm[name].setdefault(k, []).append(fj.get(k))
-                setm_all[name].setdefault(k, []).append(fa.get(k))
-            row = {k: cj.get(k) for k in ("pfc", "fsr", "penetration", "freeze", "inverted")}
-            row["bas"] = mean_def([load(os.path.join(ed, f"bas_{c}.json"))["bas"] for c in clips])
-            paths = [os.path.join(out, "gen", name, f"seed{s}", "seg", c + ".npy") for c in clips]
-            row["boundary_jerk"] = mean_def(bjerk_set(paths, sampler, cj))
-            for k, v in row.items():
-                seg[name].setdefault(k, []).append(v)
-            lj = opt_load(os.path.join(ed, "long.json")) if args.long else None
-            if lj is not None:
-                row = {k: lj.get(k)
-                       for k in ("bas", "pfc", "fsr", "penetration", "freeze", "inverted")}
-                p = os.path.join(out, "gen", name, f"seed{s}", "long", "song.npy")
-                row["boundary_jerk"] = bjerk_set([p], sampler, lj)[0]
+    def collect(run_out, run_configs):
+        """Per-configuration metric lists of the run in `run_out` (this run, or --baseline's)."""
+        seg, lng, setm, setm_all, done = {}, {}, {}, {}, {}
+        for name, _, _, sampler in run_configs:
+            seg[name], lng[name], setm[name], setm_all[name], done[name] = {}, {}, {}, {}, []
+            for s in seeds:
+                ed = os.path.join(run_out, "eval", name, f"seed{s}")
+                fj, fa, cj = (opt_load(os.path.join(ed, f)) for f in
+                              ("fid.json", "fid_all.json", "clip.json"))
+                if fj is None or fa is None or cj is None:
+                    continue
+                done[name].append(s)
+                for k in SET:
+                    setm[name].setdefault(k, []).append(fj.get(k))
+                    setm_all[name].setdefault(k, []).append(fa.get(k))
+                row = {k: cj.get(k) for k in ("pfc", "fsr", "penetration", "freeze", "inverted")}
+                row["bas"] = mean_def([load(os.path.join(ed, f"bas_{c}.json"))["bas"]
+                                       for c in clips])
+                paths = [os.path.join(run_out, "gen", name, f"seed{s}", "seg", c + ".npy")
+                         for c in clips]
+                row["boundary_jerk"] = mean_def(bjerk_set(paths, sampler, cj))
                 for k, v in row.items():
-                    lng[name].setdefault(k, []).append(v)
+                    seg[name].setdefault(k, []).append(v)
+                lj = opt_load(os.path.join(ed, "long.json")) if args.long else None
+                if lj is not None:
+                    row = {k: lj.get(k)
+                           for k in ("bas", "pfc", "fsr", "penetration", "freeze", "inverted")}
+                    p = os.path.join(run_out, "gen", name, f"seed{s}", "long", "song.npy")
+                    row["boundary_jerk"] = bjerk_set([p], sampler, lj)[0]
+                    for k, v in row.items():
+                        lng[name].setdefault(k, []).append(v)
+        return seg, lng, setm, setm_all, done
+
+    seg, lng, setm, setm_all, done = collect(out, configs)
+    base = None
+    if args.baseline:
+        full_cfg = [c for c in CONFIGS if c[0] == "full"]
+        b_seg, _, _, b_all, b_done = collect(args.baseline, full_cfg)
+        if len(b_done["full"]) == 0:
+            sys.exit(f"--baseline {args.baseline}: no evaluated full-system seed in it")
+        base = (b_seg["full"], b_all["full"], b_done["full"])
 
     # ---- render
     L = []
@@ -540,6 +554,31 @@ def cmd_report(args):
             rows.append((f"penetration lower with guidance than without ({where})", "full",
                          "full vs w/o penetration guidance",
                          f"{fmt(a, sa, 3)} % vs {fmt(b, sb, 3)} %{note}", ok))
+    if base is not None and "full" in seg:
+        b_seg, b_all, b_done = base
+        w(f"## Before and after: {args.baseline_label}")
+        w("")
+        w(f"The full system of this run against the full system of `{args.baseline}` "
+          f"({args.baseline_label}; seeds {' '.join(b_done)}), on the same held-out segments, "
+          f"beats and {n_all} real clips.")
+        w("")
+        cols = [("bas", "BAS ↑", 4, 1.0), ("fsr", "FSR % ↓", 2, 100.0),
+                ("boundary_jerk", "Boundary jerk ↓", 3, 1.0),
+                ("inverted", "Upside down % ↓", 2, 100.0),
+                ("fid_k_all", f"FID_k ({n_all} real) ↓", 2, 1.0),
+                ("div_k_all", "Div_k", 2, 1.0), ("fid_g_all", f"FID_g ({n_all} real) ↓", 2, 1.0)]
+        r = dict(real)
+        r.update({k + "_all": v for k, v in set_real["held_all"].items()})
+        r["div_k_all"] = set_real["held_all"].get("div_k")
+        before = {k: stats(v)[:2] for k, v in b_seg.items()}
+        before.update({k + "_all": stats(v)[:2] for k, v in b_all.items()})
+        after = {k: stats(v)[:2] for k, v in seg["full"].items()}
+        after.update({k + "_all": stats(v)[:2] for k, v in setm_all["full"].items()})
+        table(cols, [("real data (held-out motion)", r), (f"before: {args.baseline_label}", before),
+                     ("after: this run's model", after)])
+        w("Issue 16's targets: BAS ≥ 0.35, Div_k ≥ 4.5, FID_k (all real) ≤ 92; boundary jerk "
+          "< 1.5 and FSR ≤ real.")
+        w("")
     w("## Reading the numbers")
     w("")
     full = [r for r in rows if r[1] == "full"]
@@ -653,6 +692,9 @@ def main():
     p.add_argument("--long", action="store_true")
     p.add_argument("--dry-run", action="store_true")
     p.add_argument("--report", required=True)
+    p.add_argument("--baseline", help="an earlier run's OUT directory: its full system is "
+                   "compared with this run's in a before/after table")
+    p.add_argument("--baseline-label", default="the earlier model")
     p.set_defaults(func=cmd_report)
     a = ap.parse_args()
     a.func(a)

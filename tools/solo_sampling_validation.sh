@@ -14,7 +14,8 @@
 # Environment: MODEL (required), DANCEGEN (default target/release/dancegen),
 #   REFERENCE=target/solo-eval/gt_train (real training clips as (T, 24, 3) .npy, written by
 #   tools/solo_eval.sh), OUT=target/solo-validation/<model name>, GENRE=salsa,
-#   PYTHON=python3 with numpy.
+#   PYTHON=python3 with numpy, FLAGS="extra generate flags" (e.g. --no-foot-refine; give each
+#   flag set its own OUT).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
@@ -43,8 +44,9 @@ np.save(sys.argv[4], np.array([t - s for t in range(len(f)) if f[t, -1] > 0 and 
 PY
         for seed in 0 1 2; do
             out=$OUT/dances/${song}_${s}_$seed.npy
+            # shellcheck disable=SC2086
             [ -f "$out" ] || "$BIN" -q generate "$SONGS/$song.ogg" --model "$MODEL" --start "$s" \
-                --end "$e" --seed "$seed" --genre "$GENRE" -o "$out"
+                --end "$e" --seed "$seed" --genre "$GENRE" ${FLAGS:-} -o "$out"
             "$BIN" -q eval --pred "$out" --protocol none --fps 30 --metrics bas \
                 --bas-variant bailando --beats "$OUT/beats/${song}_$s.npy" \
                 --json "$OUT/eval/bas_${song}_${s}_$seed.json" >/dev/null
