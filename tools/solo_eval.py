@@ -612,6 +612,33 @@ def cmd_report(args):
             same = "on the same beats" if where == "segments" else "on its segments' beats"
             w(f"- BAS ({where}): full system {m:.4f} vs the real held-out motion's "
               f"{real['bas']:.4f} {same} ({'higher' if m > real['bas'] else 'lower'}).")
+    # Issue 16: the full system should be at least as good as every ablation on BAS and FID_k.
+    if "full" in seg and others:
+        w("")
+        w("**The full system against each other configuration** on BAS (higher is better) and "
+          f"FID_k against the {n_all} real clips (lower is better), means over seeds; "
+          "\"loses\" marks a configuration that beats the full system, with the gap in units of "
+          "the larger of the two seed standard deviations:")
+        w("")
+        w("| configuration | BAS, segments | BAS, long form | FID_k |")
+        w("|---|---|---|---|")
+        pairs = [("bas", seg, 1), ("bas", lng, 1), ("fid_k", setm_all, -1)]
+        for name, label, _, _ in others:
+            cells = []
+            for key, data, sign in pairs:
+                fm, fs, _ = stats(data.get("full", {}).get(key, []))
+                om, os_, _ = stats(data.get(name, {}).get(key, []))
+                if fm is None or om is None:
+                    cells.append("n/a")
+                    continue
+                gap = (om - fm) * sign
+                spread = max(fs or 0.0, os_ or 0.0)
+                units = f", {gap / spread:.1f} std" if spread > 0 else ""
+                verdict = "full loses" if gap > 0 else "full wins or ties"
+                cells.append(f"{om:.4g} vs {fm:.4g}: {verdict}{units if gap > 0 else ''}")
+            w(f"| {label} | " + " | ".join(cells) + " |")
+        w("")
+        w("Where the full system loses, docs/solo-data-v2.md (the issue 16 record) says why.")
     w("")
     w("Caveats:")
     w("")
@@ -627,8 +654,9 @@ def cmd_report(args):
     w("- **Capsule penetration.** Penetration is our capsule-body approximation of Lodge++'s "
       "mesh-based self-penetration ratio (percent of forearm/hand samples inside another body "
       "part; `dancegen_metrics::penetration`), not the paper's SDF/mesh metric.")
-    w("- **Tiny training set.** The model was trained on CMU salsa takes paired with two songs "
-      "(escape_from_chaosland, metal_madness); the held-out song and dancers are unseen.")
+    w("- **Tiny training set.** The model was trained on a few dozen CMU and AIST++ takes (its "
+      "model card lists them) paired with two songs (escape_from_chaosland, metal_madness); the "
+      "held-out song and dancers are unseen.")
     w("- **Short segments for the long-form metrics.** A 16–20 s segment has only 3–4 window "
       "boundaries and 16–19 one-second windows; the long-form rows are the ones to read for "
       "boundary jerk and freezing.")
