@@ -99,7 +99,7 @@ fn list(json: bool) -> Result<()> {
     for m in &found {
         writeln!(
             out,
-            "  {:<20} {:<6} {}{}",
+            "  {:<20} {:<8} {}{}",
             m.name,
             system_of(&m.kind).unwrap_or("?"),
             m.dir.display(),

@@ -151,10 +151,11 @@ impl DanceSystem for Holistic {
             }],
             span,
             summary: format!(
-                "{t} frames ({:.1} s at {FPS} fps) with fingers and face, seed {}, {} windows",
+                "{t} frames ({:.1} s at {FPS} fps) with fingers and face, seed {}, {} window{}",
                 t as f64 / f64::from(FPS),
                 input.common.seed,
                 made.windows,
+                if made.windows == 1 { "" } else { "s" },
             ),
             timing_breakdown: String::new(),
             notes,
