@@ -97,6 +97,16 @@ fn read_json(p: &Path) -> serde_json::Value {
 
 /// `eval --metrics genre` of `pred` stems against the whole real set, with `extra` flags.
 fn eval_genre(pred: &[&str], want: &str, extra: &[&str]) -> std::process::Output {
+    eval_genre_against(pred, &[s(&set().gt).to_string()], want, extra)
+}
+
+/// `eval --metrics genre` of `pred` stems against the `gt` files or folders, with `extra` flags.
+fn eval_genre_against(
+    pred: &[&str],
+    gt: &[String],
+    want: &str,
+    extra: &[&str],
+) -> std::process::Output {
     let set = set();
     let pred: Vec<String> = pred
         .iter()
@@ -104,9 +114,9 @@ fn eval_genre(pred: &[&str], want: &str, extra: &[&str]) -> std::process::Output
         .collect();
     let mut args: Vec<&str> = vec!["eval", "--pred"];
     args.extend(pred.iter().map(String::as_str));
+    args.push("--gt");
+    args.extend(gt.iter().map(String::as_str));
     args.extend([
-        "--gt",
-        s(&set.gt),
         "--gt-genres",
         s(&set.manifest),
         "--want-genre",
@@ -207,25 +217,11 @@ fn genres_with_one_real_clip_are_left_out_unless_asked() {
         .filter(|(stem, _, _)| *stem != "85_04_neo30")
         .map(|(stem, _, _)| s(&set.gt.join(format!("{stem}.npy"))).to_string())
         .collect();
-    let pred = s(&set.gt.join("05_02.npy")).to_string();
     let dir = tempfile::tempdir().unwrap();
     let run = |want: &str, extra: &[&str], json: &Path| {
-        let mut a: Vec<&str> = vec!["eval", "--pred", &pred, "--gt"];
-        a.extend(gt.iter().map(String::as_str));
-        a.extend([
-            "--gt-genres",
-            s(&set.manifest),
-            "--want-genre",
-            want,
-            "--metrics",
-            "genre",
-            "--fps",
-            "30",
-            "--json",
-            s(json),
-        ]);
-        a.extend(extra);
-        dancegen(&a)
+        let mut flags = vec!["--json", s(json)];
+        flags.extend(extra);
+        eval_genre_against(&["05_02"], &gt, want, &flags)
     };
     let out = dir.path().join("default.json");
     ok(&run("modern", &[], &out));
