@@ -18,46 +18,22 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
         &args.holistic_mmr,
         &args.holistic_generator,
     ) {
-        let name = args.name.as_deref().unwrap_or("soulnet-small");
-        let pb = spinner("assembling the holistic model", quiet);
-        assemble_holistic_bundle(vq, mmr, generator, &args.output, name)?;
-        pb.finish_and_clear();
-        if !quiet {
-            writeln!(
-                std::io::stdout().lock(),
-                "{name} -> {}",
-                args.output.display()
-            )?;
-        }
-        return Ok(());
+        return assemble(args, quiet, "soulnet-small", "the holistic model", |name| {
+            assemble_holistic_bundle(vq, mmr, generator, &args.output, name)?;
+            Ok(String::new())
+        });
     }
     if let Some(run) = &args.group {
-        let name = args.name.as_deref().unwrap_or("tcdiffpp-small");
-        let pb = spinner("assembling the group model", quiet);
-        assemble_group_bundle(run, &args.output, name)?;
-        pb.finish_and_clear();
-        if !quiet {
-            writeln!(
-                std::io::stdout().lock(),
-                "{name} -> {}",
-                args.output.display()
-            )?;
-        }
-        return Ok(());
+        return assemble(args, quiet, "tcdiffpp-small", "the group model", |name| {
+            assemble_group_bundle(run, &args.output, name)?;
+            Ok(String::new())
+        });
     }
     if let (Some(hfsq), Some(ldm)) = (&args.hfsq, &args.ldm) {
-        let name = args.name.as_deref().unwrap_or("reactdance-small");
-        let pb = spinner("assembling the duet model", quiet);
-        assemble_duet_bundle(hfsq, ldm, &args.output, name)?;
-        pb.finish_and_clear();
-        if !quiet {
-            writeln!(
-                std::io::stdout().lock(),
-                "{name} -> {}",
-                args.output.display()
-            )?;
-        }
-        return Ok(());
+        return assemble(args, quiet, "reactdance-small", "the duet model", |name| {
+            assemble_duet_bundle(hfsq, ldm, &args.output, name)?;
+            Ok(String::new())
+        });
     }
     let (Some(vqvae), Some(gpt), Some(pddm)) = (&args.vqvae, &args.gpt, &args.pddm) else {
         bail!(
@@ -66,21 +42,42 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
              (holistic model)"
         );
     };
-    let name = args.name.as_deref().unwrap_or("lodgepp-small");
-    let pb = spinner("assembling the model and its key-motion library", quiet);
-    let clips = assemble_bundle(
-        vqvae,
-        gpt,
-        pddm,
-        &args.output,
-        name,
-        args.default_genre.as_deref(),
-    )?;
+    assemble(
+        args,
+        quiet,
+        "lodgepp-small",
+        "the model and its key-motion library",
+        |name| {
+            let clips = assemble_bundle(
+                vqvae,
+                gpt,
+                pddm,
+                &args.output,
+                name,
+                args.default_genre.as_deref(),
+            )?;
+            Ok(format!(" ({clips} key motions in the library)"))
+        },
+    )
+}
+
+/// One bundle: `build` writes the model named `--name` (or `default_name`) under a spinner and
+/// returns extra words for the closing `NAME… -> DIR` line.
+fn assemble(
+    args: &BundleArgs,
+    quiet: bool,
+    default_name: &str,
+    what: &str,
+    build: impl FnOnce(&str) -> Result<String>,
+) -> Result<()> {
+    let name = args.name.as_deref().unwrap_or(default_name);
+    let pb = spinner(&format!("assembling {what}"), quiet);
+    let extra = build(name)?;
     pb.finish_and_clear();
     if !quiet {
         writeln!(
             std::io::stdout().lock(),
-            "{name} ({clips} key motions in the library) -> {}",
+            "{name}{extra} -> {}",
             args.output.display()
         )?;
     }
