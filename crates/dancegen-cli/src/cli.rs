@@ -391,10 +391,9 @@ pub struct EvalArgs {
     #[arg(long, value_name = "NAME")]
     pub want_genre: Option<String>,
     /// Genre check: genres with fewer real --gt clips than this are left out of the classifier
-    /// (and listed under `excluded`): one clip is one performance, which leave-one-out cannot
-    /// test. 1 keeps every genre.
-    #[arg(long, value_name = "N",
-          default_value_t = dancegen_metrics::genre::MIN_CLIPS_PER_GENRE as u64,
+    /// (and listed under `excluded`); 2 drops one-clip genres, whose one performance
+    /// leave-one-out cannot test. The default, 1, keeps every genre.
+    #[arg(long, value_name = "N", default_value_t = 1,
           value_parser = clap::value_parser!(u64).range(1..))]
     pub genre_min_clips: u64,
     /// Beat-align-score variant.

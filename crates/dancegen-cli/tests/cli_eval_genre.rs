@@ -207,8 +207,8 @@ fn genre_features_follow_the_protocol() {
     assert!((share - salsa as f64 / 3.0).abs() < 1e-12, "{j}");
 }
 
-/// A genre with one real clip is one performance: by default it is left out of the classifier
-/// and reported, asking for it is refused, and `--genre-min-clips 1` brings it back.
+/// A genre with one real clip is one performance: `--genre-min-clips 2` leaves it out of the
+/// classifier and reports it, and asking for it is then refused; the default keeps it.
 #[test]
 fn genres_with_one_real_clip_are_left_out_unless_asked() {
     let set = set();
@@ -223,8 +223,8 @@ fn genres_with_one_real_clip_are_left_out_unless_asked() {
         flags.extend(extra);
         eval_genre_against(&["05_02"], &gt, want, &flags)
     };
-    let out = dir.path().join("default.json");
-    ok(&run("modern", &[], &out));
+    let out = dir.path().join("min2.json");
+    ok(&run("modern", &["--genre-min-clips", "2"], &out));
     let g = &read_json(&out)["genre"];
     assert_eq!(g["classes"], serde_json::json!({"modern": 3, "salsa": 3}));
     assert_eq!(g["excluded"], serde_json::json!({"break": 1}));
@@ -232,7 +232,11 @@ fn genres_with_one_real_clip_are_left_out_unless_asked() {
     assert!((g["chance_uniform"].as_f64().unwrap() - 0.5).abs() < 1e-12);
     assert!(g["fid_k"].get("break").is_none(), "{g}");
 
-    let o = run("break", &[], &dir.path().join("break.json"));
+    let o = run(
+        "break",
+        &["--genre-min-clips", "2"],
+        &dir.path().join("break.json"),
+    );
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(
@@ -240,14 +244,15 @@ fn genres_with_one_real_clip_are_left_out_unless_asked() {
         "{e}"
     );
 
-    let out = dir.path().join("all.json");
-    ok(&run("modern", &["--genre-min-clips", "1"], &out));
+    let out = dir.path().join("default.json");
+    ok(&run("modern", &[], &out));
     let g = &read_json(&out)["genre"];
     assert_eq!(
         g["classes"],
         serde_json::json!({"break": 1, "modern": 3, "salsa": 3})
     );
     assert_eq!(g["excluded"], serde_json::json!({}));
+    assert_eq!(g["min_clips"].as_u64(), Some(1));
 
     let o = run(
         "modern",

@@ -314,14 +314,13 @@ pub fn leave_one_out_accuracy<F: AsRef<[f64]>>(
     })
 }
 
-/// Fewest real clips a genre needs to take part in the classifier by default
-/// ([`keep_genres_with_at_least`]): with one clip, its "centroid" is that one take's features and
-/// leave-one-out cannot test it at all (the fit without it does not know the genre), so the class
-/// measures one performance, not a genre. Ours (issue 16), not a published constant.
-pub const MIN_CLIPS_PER_GENRE: usize = 2;
-
 /// Splits `examples` into those whose genre has at least `min` examples and the genres left out
 /// (genre → its number of examples). The order of the kept examples is unchanged.
+///
+/// Why: a genre with one clip has that one take's features as its "centroid", and leave-one-out
+/// cannot test it (the fit without it does not know the genre), so the class stands for one
+/// performance, not a genre; with `min = 2` such classes stop attracting every dance that
+/// happens to resemble that take (issue 16: solo-v3's single street-jazz take).
 pub fn keep_genres_with_at_least<F>(
     examples: Vec<(String, F)>,
     min: usize,
@@ -418,7 +417,7 @@ mod tests {
             ("salsa".to_string(), vec![4.0]),
             ("modern".to_string(), vec![5.0]),
         ];
-        let (kept, left) = keep_genres_with_at_least(ex.clone(), MIN_CLIPS_PER_GENRE);
+        let (kept, left) = keep_genres_with_at_least(ex.clone(), 2);
         let names: Vec<&str> = kept.iter().map(|(g, _)| g.as_str()).collect();
         assert_eq!(names, ["salsa", "modern", "salsa", "modern"]);
         assert_eq!(kept[1].1, vec![3.0]);

@@ -5,7 +5,7 @@
 //! majority) and the leave-one-out accuracy on the real clips themselves. Beside it, FID_k of the
 //! `--pred` set against each genre's real clips (what `fid_k` gives with `--gt` holding only that
 //! genre's clips). Genres with fewer than `--genre-min-clips` real clips are left out of the
-//! classifier and reported under `excluded` (`dancegen_metrics::genre::MIN_CLIPS_PER_GENRE`).
+//! classifier and reported under `excluded` (`dancegen_metrics::genre::keep_genres_with_at_least`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
