@@ -94,20 +94,6 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
         seqs.push(sequence_latents(&model, &motion, music, frames, &dev));
     }
     let ranks = retrieval_ranks(&zm, &za);
-    let paper: Vec<SequenceLatents> = seqs
-        .iter()
-        .map(|[m, a, _]| SequenceLatents {
-            motion: m,
-            music: a,
-        })
-        .collect();
-    let released: Vec<SequenceLatents> = seqs
-        .iter()
-        .map(|[m, _, w]| SequenceLatents {
-            motion: m,
-            music: w,
-        })
-        .collect();
     Ok(serde_json::json!({
         "clips": clips.len(),
         "windows": zm.len(),
@@ -116,9 +102,26 @@ fn mmr(model_dir: &Path, dataset: &Path) -> Result<serde_json::Value, String> {
         "r3": recall_at(&ranks, 3),
         "chance_r1": chance_recall(zm.len(), 1),
         "chance_r3": chance_recall(zm.len(), 3),
-        "matching_score_eq8": matching_score(&paper, MatchingVariant::Paper),
-        "matching_score_released_code": matching_score(&released, MatchingVariant::ReleasedCode),
+        "matching_score_eq8": matching_scores(&seqs, MatchingVariant::Paper),
+        "matching_score_released_code": matching_scores(&seqs, MatchingVariant::ReleasedCode),
     }))
+}
+
+/// The matching score over clips' `[segment motion, segment music, whole-clip music]` latents
+/// ([`sequence_latents`]): Eq. 8 pairs each motion segment with its music segment, the released
+/// code's variant with the whole clip's music.
+fn matching_scores(seqs: &[[Vec<Vec<f32>>; 3]], variant: MatchingVariant) -> f64 {
+    let pairs: Vec<SequenceLatents> = seqs
+        .iter()
+        .map(|[m, a, w]| SequenceLatents {
+            motion: m,
+            music: match variant {
+                MatchingVariant::Paper => a,
+                MatchingVariant::ReleasedCode => w,
+            },
+        })
+        .collect();
+    matching_score(&pairs, variant)
 }
 
 /// One clip's MMR latents for the matching score: motion and music per 1-s segment, and the
@@ -207,24 +210,10 @@ fn mmr_gen(model_dir: &Path, dataset: &Path, gen_dir: &Path) -> Result<serde_jso
         ));
     }
     stems.sort();
-    let paper: Vec<SequenceLatents> = seqs
-        .iter()
-        .map(|[m, a, _]| SequenceLatents {
-            motion: m,
-            music: a,
-        })
-        .collect();
-    let released: Vec<SequenceLatents> = seqs
-        .iter()
-        .map(|[m, _, w]| SequenceLatents {
-            motion: m,
-            music: w,
-        })
-        .collect();
     Ok(serde_json::json!({
         "clips": stems,
-        "matching_score_eq8": matching_score(&paper, MatchingVariant::Paper),
-        "matching_score_released_code": matching_score(&released, MatchingVariant::ReleasedCode),
+        "matching_score_eq8": matching_scores(&seqs, MatchingVariant::Paper),
+        "matching_score_released_code": matching_scores(&seqs, MatchingVariant::ReleasedCode),
     }))
 }
 
