@@ -112,53 +112,29 @@ fn holistic_errors_name_the_problem() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("d.npy");
     let out = out.to_str().unwrap();
+    // `generate --system holistic` up to `end` seconds into `out`, with `extra` flags.
+    let holistic = |end: &str, extra: &[&str]| {
+        let song = song();
+        let mut args = vec![
+            "-q", "generate", &song, "--system", "holistic", "--end", end,
+        ];
+        args.extend(extra);
+        args.extend(["-o", out]);
+        dancegen(&args)
+    };
     // Too short.
-    let o = dancegen(&[
-        "-q",
-        "generate",
-        &song(),
-        "--system",
-        "holistic",
-        "--end",
-        "1",
-        "-o",
-        out,
-    ]);
+    let o = holistic("1", &[]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("at least 2 s"), "{}", stderr(&o));
     // A FLAME mapping of the wrong shape names the file and the shape.
     let bad = dir.path().join("mapping.npy");
     dancegen_io::write_npy_f32(&bad, &[52, 100], &vec![0.0; 5200]).unwrap();
-    let o = dancegen(&[
-        "-q",
-        "generate",
-        &song(),
-        "--system",
-        "holistic",
-        "--end",
-        "4",
-        "--flame-mapping",
-        bad.to_str().unwrap(),
-        "-o",
-        out,
-    ]);
+    let o = holistic("4", &["--flame-mapping", bad.to_str().unwrap()]);
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(e.contains("mapping.npy") && e.contains("103"), "{e}");
     // A model directory that is not a holistic model.
-    let o = dancegen(&[
-        "-q",
-        "generate",
-        &song(),
-        "--system",
-        "holistic",
-        "--end",
-        "4",
-        "--model",
-        dir.path().to_str().unwrap(),
-        "-o",
-        out,
-    ]);
+    let o = holistic("4", &["--model", dir.path().to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("model.toml"), "{}", stderr(&o));
     assert!(!std::path::Path::new(out).exists());
