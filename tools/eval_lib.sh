@@ -28,3 +28,20 @@ snapshot_binary() {
     BIN=$2/bin/dancegen
     ln -f "$1" "$BIN" 2>/dev/null || cp -f "$1" "$BIN"
 }
+
+# The real motion as joints, with "$BIN" (snapshot_binary): each held-out clip of $1/clips.txt
+# (its 5th column is the clip's .npz) into $1/gt/, each training clip of $2/motion/*.npz into
+# $1/gt_train/, and both into $1/gt_all/ (hard links).
+convert_real_clips() {
+    local out=$1 dataset=$2 stem npz
+    mkdir -p "$out/gt" "$out/gt_train" "$out/gt_all"
+    while read -r stem _ _ _ npz _; do
+        "$BIN" -q convert "$npz" -o "$out/gt/$stem.npy"
+        ln -f "$out/gt/$stem.npy" "$out/gt_all/$stem.npy"
+    done < "$out/clips.txt"
+    for npz in "$dataset"/motion/*.npz; do
+        stem=$(basename "$npz" .npz)
+        "$BIN" -q convert "$npz" -o "$out/gt_train/$stem.npy"
+        ln -f "$out/gt_train/$stem.npy" "$out/gt_all/$stem.npy"
+    done
+}

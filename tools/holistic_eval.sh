@@ -133,15 +133,7 @@ $SOLO_HELP clips --manifest "$DATASET/manifest.json" --features "$OUT/song/featu
 $HELP halfbeats --clips "$OUT/clips.txt" --beats "$OUT/beats" --out "$OUT/beats_half"
 SONG_FRAMES=$(cat "$OUT/beats/song_frames.txt")
 NCLIPS=$(wc -l < "$OUT/clips.txt")
-while read -r stem _ _ _ npz; do
-    "$BIN" -q convert "$npz" -o "$OUT/gt/$stem.npy"
-    ln -f "$OUT/gt/$stem.npy" "$OUT/gt_all/$stem.npy"
-done < "$OUT/clips.txt"
-for npz in "$DATASET"/motion/*.npz; do
-    stem=$(basename "$npz" .npz)
-    "$BIN" -q convert "$npz" -o "$OUT/gt_train/$stem.npy"
-    ln -f "$OUT/gt_train/$stem.npy" "$OUT/gt_all/$stem.npy"
-done
+convert_real_clips "$OUT" "$DATASET"
 log "$NCLIPS held-out clips; song $SONG_FRAMES frames; model $MODEL_NAME (default guidance $DEFAULT_G)"
 
 # ---- generation (reused for the same model files unless FRESH=1)

@@ -83,16 +83,9 @@ mkdir -p "$OUT/song" "$OUT/beats" "$OUT/gt" "$OUT/gt_train" "$OUT/gt_all" "$OUT/
 $HELP clips --manifest "$DATASET/manifest.json" --features "$OUT/song/features.npy" \
     --song "$SONG" --out "$OUT/beats" > "$OUT/clips.txt"
 SONG_FRAMES=$(cat "$OUT/beats/song_frames.txt")
-while read -r stem start end frames npz; do
-    "$BIN" -q convert "$npz" -o "$OUT/gt/$stem.npy"
-    ln -f "$OUT/gt/$stem.npy" "$OUT/gt_all/$stem.npy"
-done < "$OUT/clips.txt"
-# The training clips: a second, larger FID reference (all real salsa) and a calibration row.
-for npz in "$DATASET"/motion/*.npz; do
-    stem=$(basename "$npz" .npz)
-    "$BIN" -q convert "$npz" -o "$OUT/gt_train/$stem.npy"
-    ln -f "$OUT/gt_train/$stem.npy" "$OUT/gt_all/$stem.npy"
-done
+# The held-out clips, and the training clips: a second, larger FID reference (all real salsa)
+# and a calibration row.
+convert_real_clips "$OUT" "$DATASET"
 log "$(wc -l < "$OUT/clips.txt") held-out clips; song $SONG_FRAMES frames; window $WINDOW"
 
 flags_of() {
