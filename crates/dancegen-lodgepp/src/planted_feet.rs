@@ -12,7 +12,7 @@
 //! in 76 % of frames while moving at 0.98 m/s on average (issue 16, docs/solo-data-v2.md).
 
 use dancegen_motion::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
-use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, planted_feet_offsets};
+use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, leashed, planted_feet_offsets};
 use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use dancegen_nn::loss::FkSkeleton;
@@ -33,17 +33,8 @@ pub const IK_BLEND_FRAMES: usize = 4;
 /// no longer removes.
 pub const ROOT_LOCK_SMOOTHING_FRAMES: f64 = 2.0;
 
-/// When a foot counts as planted.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PlantedRule {
-    /// The model's contact label **or** near the floor (the rule of the first bundles).
-    #[default]
-    Either,
-    /// The model's contact label **and** near the floor: a low foot the model moves is left
-    /// to move (slides and steps close to the floor), a lifted foot is never pinned.
-    Both,
-}
+/// When a foot counts as planted (defined with the root lock it feeds).
+pub use dancegen_motion::foot_lock::PlantedRule;
 
 /// Both passes: root lock, then leg IK ([`PlantedRule::Either`]).
 pub fn clean_planted_feet(frames: &mut [f32]) -> FootIkReport {
@@ -64,11 +55,19 @@ pub fn lock_planted_feet(frames: &mut [f32]) {
 
 /// [`lock_planted_feet`] with a chosen [`PlantedRule`].
 pub fn lock_planted_feet_with(frames: &mut [f32], rule: PlantedRule) {
+    lock_planted_feet_leashed(frames, rule, None);
+}
+
+/// [`lock_planted_feet_with`] on a leash of `leash_frames` (`None`: none).
+pub fn lock_planted_feet_leashed(frames: &mut [f32], rule: PlantedRule, leash_frames: Option<f64>) {
     let Some((feet, contact)) = feet_and_contacts(frames, rule) else {
         return;
     };
     // Z-up: the root's horizontal channels are x and y.
-    let offsets = planted_feet_offsets(&feet, &contact, FEET.len(), Axes::Z_UP);
+    let mut offsets = planted_feet_offsets(&feet, &contact, FEET.len(), Axes::Z_UP);
+    if let Some(l) = leash_frames {
+        offsets = leashed(&offsets, l);
+    }
     for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
         let o: Vec<f64> = offsets.iter().map(|o| f64::from(o[k])).collect();
         for (f, v) in gaussian_smooth(&o, ROOT_LOCK_SMOOTHING_FRAMES, Ends::OddReflect)

@@ -19,6 +19,19 @@
 /// of, and weights in between count partially (see [`contact_weight`]).
 pub const PLANTED: f32 = 0.5;
 
+/// When a foot counts as planted: a model's contact label, nearness to the floor, or both
+/// (`dancegen_lodgepp::planted_feet` explains the choice for dance footwork).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantedRule {
+    /// The model's contact label **or** near the floor (the rule of the first bundles).
+    #[default]
+    Either,
+    /// The model's contact label **and** near the floor: a low foot the model moves is left
+    /// to move (slides and steps close to the floor), a lifted foot is never pinned.
+    Both,
+}
+
 /// How much a foot with contact prediction `c` (nominally 0 or 1) counts: 0 below
 /// [`PLANTED`], rising linearly to 1 at 0.9.
 pub fn contact_weight(c: f32) -> f32 {
@@ -98,6 +111,25 @@ pub fn planted_feet_offsets(
     out
 }
 
+/// [`planted_feet_offsets`] on a leash: every step's correction fades with time constant
+/// `frames` (`o[t] = e^(−1/frames) o[t−1] + Δ[t]`), so the correction removes glides of a few
+/// steps but never accumulates into the path. For a dancer whose place is set by someone else
+/// (a duet follower beside its leader): the unleashed correction drifts the follower away from
+/// the leader by the sum of every removed glide over the whole dance.
+pub fn leashed(offsets: &[[f32; 2]], frames: f64) -> Vec<[f32; 2]> {
+    let keep = (-1.0 / frames.max(f64::MIN_POSITIVE)).exp() as f32;
+    let mut out = Vec::with_capacity(offsets.len());
+    let mut prev_in = [0f32; 2];
+    let mut prev_out = [0f32; 2];
+    for o in offsets {
+        let next: [f32; 2] = std::array::from_fn(|a| keep * prev_out[a] + (o[a] - prev_in[a]));
+        out.push(next);
+        prev_in = *o;
+        prev_out = next;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -164,5 +196,30 @@ mod tests {
                 "{o:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_leashed_correction_fades_after_the_glide_and_keeps_the_glide_removed_while_it_lasts() {
+        // Cumulative offsets of a 10-frame glide of −1 cm/frame, then nothing.
+        let raw: Vec<[f32; 2]> = (0..100).map(|t| [-0.01 * t.min(10) as f32, 0.0]).collect();
+        let held = leashed(&raw, 1e9);
+        for (a, b) in raw.iter().zip(&held) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-5,
+                "an endless leash is the plain correction"
+            );
+        }
+        let l = leashed(&raw, 15.0);
+        // During the glide the steps are removed almost fully (the leash only lets a little
+        // back per frame)...
+        assert!((l[1][0] - raw[1][0]).abs() < 1e-6);
+        assert!(l[10][0] < -0.07, "{}", l[10][0]);
+        // ...and afterwards the correction returns to the model's own place.
+        assert!(
+            l[99][0].abs() < 0.01 * (-89.0f32 / 15.0).exp() * 10.0,
+            "{}",
+            l[99][0]
+        );
+        assert!(l[99][0] < 0.0 && l[99][0] > l[50][0]);
     }
 }
