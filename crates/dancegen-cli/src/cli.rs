@@ -213,7 +213,8 @@ pub struct GenerateArgs {
     #[arg(long)]
     pub no_penetration_guidance: bool,
     /// Leave the feet as generated: no root-path correction for the support foot and no leg IK
-    /// pinning planted feet (post-processing steps, not part of Lodge++).
+    /// pinning planted feet (post-processing steps, not part of Lodge++, ReactDance, TCDiff++
+    /// or SoulNet; a duet follower gets the root correction only, on a leash to its leader).
     #[arg(long)]
     pub no_foot_lock: bool,
     /// Leave the timing as generated: no time warp moving the dance's beats onto the song's

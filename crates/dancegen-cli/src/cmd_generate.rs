@@ -204,6 +204,7 @@ fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOpt
         guidance_fine: args.guidance_fine,
         guidance_levels: args.guidance_levels.clone(),
         separation: !args.no_separation,
+        foot_lock: !args.no_foot_lock,
         beat_align: !args.no_beat_align,
         ..DuetOptions::new(motion, leader.display().to_string())
     })

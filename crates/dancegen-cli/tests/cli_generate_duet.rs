@@ -175,6 +175,79 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     assert!(dir.path().join("f.bvh").is_file());
 }
 
+/// Mean horizontal speed (m/s at 30 fps) of the lowest of the four foot joints (SMPL 7, 8, 10,
+/// 11) over the frames of `(T, 24, 3)` joints: what a planted foot's glide adds to.
+fn lowest_foot_glide(j: &[f64], t: usize) -> f64 {
+    let at = |f: usize, k: usize, a: usize| j[(f * 24 + k) * 3 + a];
+    let feet = [7, 8, 10, 11];
+    (1..t)
+        .map(|f| {
+            let k = *feet
+                .iter()
+                .min_by(|&&a, &&b| at(f, a, 1).total_cmp(&at(f, b, 1)))
+                .unwrap();
+            let (dx, dz) = (at(f, k, 0) - at(f - 1, k, 0), at(f, k, 2) - at(f - 1, k, 2));
+            (dx * dx + dz * dz).sqrt() * 30.0
+        })
+        .sum::<f64>()
+        / (t - 1) as f64
+}
+
+#[test]
+fn the_foot_lock_stops_the_follower_gliding_and_keeps_it_beside_the_leader() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &leader_bvh(),
+        "--to",
+        "smpl24",
+        "--fps",
+        "30",
+        "-o",
+        &out("leader.npy"),
+    ]));
+    let (song_s, leader_s) = (song(), leader_bvh());
+    let run = |name: &str, extra: &[&str]| {
+        let o = out(name);
+        let mut args = vec![
+            "-q", "generate", &song_s, "--leader", &leader_s, "--steps", "8",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", &o]);
+        ok(&dancegen(&args));
+        joints(&dir.path().join(name))
+    };
+    let (shape, locked) = run("locked.npy", &[]);
+    let (_, free) = run("free.npy", &["--no-foot-lock"]);
+    let (_, l) = joints(&dir.path().join("leader.npy"));
+    let t = shape[0];
+    // The lowest foot carries the weight: with the lock it glides far less. On the held-out
+    // couples the lock halves the follower's foot skating (PFC 12.3 -> 6.1,
+    // docs/duet-eval.md); here it must at least cut the glide by a quarter.
+    let (g_locked, g_free) = (lowest_foot_glide(&locked, t), lowest_foot_glide(&free, t));
+    assert!(
+        g_locked < 0.75 * g_free,
+        "lowest foot's glide: {g_locked:.3} m/s locked, {g_free:.3} m/s free"
+    );
+    // On its leash the follower stays where the model put it beside the leader: the mean
+    // pelvis-to-pelvis distance changes by well under a step.
+    let gap = |f: &[f64]| {
+        (0..t)
+            .map(|k| {
+                ((f[k * 72] - l[k * 72]).powi(2) + (f[k * 72 + 2] - l[k * 72 + 2]).powi(2)).sqrt()
+            })
+            .sum::<f64>()
+            / t as f64
+    };
+    let (a, b) = (gap(&locked), gap(&free));
+    assert!(
+        (a - b).abs() < 0.3,
+        "mean pelvis gap {a:.2} m locked, {b:.2} m free"
+    );
+}
+
 #[test]
 fn follower_only_writes_one_dancer() {
     let dir = tempfile::tempdir().unwrap();

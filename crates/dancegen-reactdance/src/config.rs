@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use dancegen_motion::foot_lock::PlantedRule;
 use dancegen_motion::repr::{DuetFollower, DuetLeader};
 
 /// Motion frames per latent token: the conv encoder halves the frame rate `down_t` times.
@@ -189,6 +190,13 @@ impl LatentLossWeights {
     }
 }
 
+/// Default leash of the follower's root lock (frames; [`SamplingDefaults::foot_lock_leash_frames`]).
+/// Chosen on four training couples (`target/datasets/duet-val`, seeds 0-2, with the model's
+/// contacts and [`PlantedRule::Both`]): 15 / 30 / 60 frames gave BED 0.423 / 0.458 / 0.424
+/// and FID_cd 300 / 234 / 192 against 0.448 and 365 without the lock (docs/solo-data-v2.md,
+/// round eight).
+pub const FOLLOWER_LEASH_FRAMES: f64 = 30.0;
+
 /// Sampling defaults a bundle ships with (the CLI overrides them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -199,6 +207,15 @@ pub struct SamplingDefaults {
     pub guidance: Vec<f64>,
     /// DDIM stochasticity (EDGE: 1; 0 = deterministic DDIM).
     pub eta: f64,
+    /// Keep the follower's planted feet in place (root lock on a leash, then leg IK;
+    /// `dancegen_lodgepp::planted_feet`; post-processing, not part of ReactDance).
+    pub foot_lock: bool,
+    /// Time constant (frames) of the root lock's leash: a removed glide is given back over
+    /// about this long, so the follower keeps the place the model gives it beside the leader.
+    pub foot_lock_leash_frames: f64,
+    /// When a follower's foot counts as planted: the model's contact channel and/or nearness
+    /// to the floor (`dancegen_lodgepp::planted_feet::PlantedRule`).
+    pub foot_lock_rule: PlantedRule,
 }
 
 impl Default for SamplingDefaults {
@@ -214,6 +231,9 @@ impl Default for SamplingDefaults {
             // 18.2 % and 75 %; higher scales also add jerk.
             guidance: vec![2.0, 0.5],
             eta: 1.0,
+            foot_lock: true,
+            foot_lock_leash_frames: FOLLOWER_LEASH_FRAMES,
+            foot_lock_rule: PlantedRule::Both,
         }
     }
 }

@@ -32,6 +32,9 @@ use crate::denoiser::DuetCond;
 /// A generated follower.
 pub struct Generated {
     pub follower: SmplMotion,
+    /// The model's foot contacts `[T, 4]` (SMPL joints 7, 8, 10, 11, as
+    /// [`DuetFollower::CONTACTS`]; nominally 0 or 1), frame for frame with `follower`.
+    pub contacts: Vec<f32>,
     /// Seconds spent sampling the latent and decoding it.
     pub sample_s: f64,
     pub decode_s: f64,
@@ -183,6 +186,10 @@ pub fn generate_follower_hooked(
             *v = (f64::from(*v) * fs[j] + fm[j]) as f32;
         }
     }
+    let contacts: Vec<f32> = data
+        .chunks_exact(DuetFollower::DIMS)
+        .flat_map(|row| row[DuetFollower::CONTACTS].iter().copied())
+        .collect();
     let mut follower = DuetFollower::decode(&data, leader, sigma).map_err(|e| e.to_string())?;
     if follower
         .trans
@@ -205,6 +212,7 @@ pub fn generate_follower_hooked(
     }
     Ok(Generated {
         follower,
+        contacts,
         sample_s,
         decode_s,
         separation_max_m,

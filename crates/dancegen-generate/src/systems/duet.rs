@@ -1,14 +1,16 @@
 //! Duet: the partner of a given leader (ReactDance, `dancegen_reactdance`).
 //!
 //! Leader (SMPL 24 at 30 fps) + the music from `start` for the leader's length → follower
-//! of the same length in the leader's world frame, then (unless turned off) moved out of the
-//! leader's body by the couple separation. The dance is `[leader, follower]`.
+//! of the same length in the leader's world frame, then (each unless turned off) its planted
+//! feet locked, its beats time-warped onto the leader's, and moved out of the leader's body by
+//! the couple separation. The dance is `[leader, follower]`.
 
 use std::path::Path;
 
+use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
 use dancegen_motion::couple_separation::SeparationConfig;
 use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
-use dancegen_motion::repr::SmplMotion;
+use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 use dancegen_reactdance::blc::{LatentSampling, LongForm};
@@ -51,6 +53,10 @@ pub struct DuetOptions {
     pub guidance_levels: Vec<f64>,
     /// Move the follower out of the leader's body (hands may touch).
     pub separation: bool,
+    /// Keep the follower's planted feet in place, as the model's `[sampling]` says (root lock
+    /// on a leash, then leg IK; post-processing, not part of ReactDance). `false` switches it
+    /// off whatever the model says.
+    pub foot_lock: bool,
     /// Time-warp the follower so its beats echo the leader's ([`crate::beat_align`];
     /// post-processing, not part of ReactDance).
     pub beat_align: bool,
@@ -67,6 +73,7 @@ impl DuetOptions {
             guidance_fine: None,
             guidance_levels: Vec::new(),
             separation: true,
+            foot_lock: true,
             beat_align: true,
         }
     }
@@ -239,13 +246,17 @@ impl DanceSystem for Duet {
             long_form,
         };
         let separation = duet.separation.then(SeparationConfig::default);
-        // With the beat alignment the separation runs after it, on the warped follower.
+        let foot_lock = (duet.foot_lock && model.config.sampling.foot_lock)
+            .then_some(model.config.sampling.foot_lock_leash_frames);
+        // Post-processing order: foot lock, beat alignment, separation (the separation runs
+        // last so nothing moves the follower back into the leader).
+        let separate_later = duet.beat_align || foot_lock.is_some();
         let out = generate_follower_hooked(
             model,
             leader,
             song.music(&span),
             &sampling,
-            separation.as_ref().filter(|_| !duet.beat_align),
+            separation.as_ref().filter(|_| !separate_later),
             input.device,
             input.hook,
         )
@@ -259,6 +270,14 @@ impl DanceSystem for Duet {
         let mut notes = Vec::new();
         let mut separation_max_m = out.separation_max_m;
         let mut separate_s = out.separate_s;
+        if let Some(leash) = foot_lock {
+            let rule = model.config.sampling.foot_lock_rule;
+            lock_follower_feet(&mut follower, &out.contacts, rule, leash)?;
+            notes.push(format!(
+                "follower's root kept from gliding over planted feet ({rule:?} rule, on a \
+                 {leash:.0}-frame leash; post-processing, not part of ReactDance)"
+            ));
+        }
         if duet.beat_align {
             let (aligned, a) =
                 align_follower_to_leader(&follower, leader).map_err(GenerateError::Generation)?;
@@ -271,12 +290,12 @@ impl DanceSystem for Duet {
                 "beat alignment"
             );
             notes.push(a.note("leader"));
-            if let Some(config) = &separation {
-                let t0 = std::time::Instant::now();
-                separation_max_m = separate_follower(&mut follower, leader, config)
-                    .map_err(GenerateError::Generation)?;
-                separate_s = t0.elapsed().as_secs_f64();
-            }
+        }
+        if separate_later && let Some(config) = &separation {
+            let t0 = std::time::Instant::now();
+            separation_max_m = separate_follower(&mut follower, leader, config)
+                .map_err(GenerateError::Generation)?;
+            separate_s = t0.elapsed().as_secs_f64();
         }
         notes.push(match separation {
             None => "no separation".to_string(),
@@ -314,4 +333,37 @@ impl DanceSystem for Duet {
             holistic: None,
         })
     }
+}
+
+/// The shared planted-feet pass on the follower, through EDGE-151 frames whose contact channel
+/// is the model's own (`contacts`, `[T, 4]`), combined with nearness to the floor by `rule`;
+/// its root lock on a leash of `leash_frames`: the follower's place comes from the model,
+/// beside the leader, and an unleashed lock would carry it away by every glide it removes.
+fn lock_follower_feet(
+    follower: &mut SmplMotion,
+    contacts: &[f32],
+    rule: PlantedRule,
+    leash_frames: f64,
+) -> Result<(), GenerateError> {
+    let gen_err = |e: &dyn std::fmt::Display| {
+        GenerateError::Generation(format!("locking the follower's feet: {e}"))
+    };
+    let mut frames = Edge151::encode(follower).map_err(|e| gen_err(&e))?;
+    let n = Edge151::CONTACTS.len();
+    if contacts.len() != frames.len() / Edge151::DIMS * n {
+        return Err(gen_err(&format!(
+            "{} contact values for {} frames",
+            contacts.len(),
+            frames.len() / Edge151::DIMS
+        )));
+    }
+    for (frame, c) in frames
+        .chunks_exact_mut(Edge151::DIMS)
+        .zip(contacts.chunks_exact(n))
+    {
+        frame[Edge151::CONTACTS].copy_from_slice(c);
+    }
+    lock_planted_feet_leashed(&mut frames, rule, Some(leash_frames));
+    *follower = Edge151::decode(&frames).map_err(|e| gen_err(&e))?;
+    Ok(())
 }
