@@ -171,6 +171,7 @@ fn main() {
         steps,
         guidance: GUIDANCE,
         refine: true,
+        refine_last_steps: None,
         penetration: penetration.then(|| (PenetrationGuidance::default(), PENETRATION_STEPS)),
         seed: 0,
     };

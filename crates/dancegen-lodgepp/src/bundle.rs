@@ -60,6 +60,8 @@ pub struct SamplingDefaults {
     pub foot_lock: bool,
     /// When a foot counts as planted for the foot lock (absent in older bundles: `either`).
     pub foot_lock_rule: crate::planted_feet::PlantedRule,
+    /// Final denoising steps the Foot Refine Block acts on (absent: every step, as Lodge++).
+    pub foot_refine_steps: Option<usize>,
 }
 
 impl Default for SamplingDefaults {
@@ -75,6 +77,7 @@ impl Default for SamplingDefaults {
             max_beat_shift: 6,
             foot_lock: true,
             foot_lock_rule: crate::planted_feet::PlantedRule::Either,
+            foot_refine_steps: None,
         }
     }
 }

@@ -49,6 +49,8 @@ pub struct GenerateOptions {
     pub guidance: f64,
     pub sampler: Sampler,
     pub refine: bool,
+    /// Final denoising steps the Foot Refine Block acts on (`None`: all).
+    pub refine_last_steps: Option<usize>,
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub gpt: SamplingOptions,
     pub max_beat_shift: usize,
@@ -70,6 +72,7 @@ impl GenerateOptions {
             guidance: s.guidance,
             sampler: Sampler::Lodgepp,
             refine: true,
+            refine_last_steps: s.foot_refine_steps,
             penetration: Some((
                 PenetrationGuidance {
                     scale: s.penetration_scale,
@@ -265,6 +268,7 @@ impl SoloModel {
             steps: opts.steps,
             guidance: opts.guidance,
             refine: opts.refine,
+            refine_last_steps: opts.refine_last_steps,
             penetration: opts.penetration,
             seed,
         }

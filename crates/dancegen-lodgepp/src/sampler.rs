@@ -39,6 +39,11 @@ pub struct PddmSampleOptions {
     pub guidance: f64,
     /// Use the Foot Refine Block.
     pub refine: bool,
+    /// Final denoising steps the Foot Refine Block acts on (`None`: every step, as Lodge++).
+    /// The block's training terms (FK velocity, acceleration, contact) damp the whole body, and
+    /// at every step that damping compounds; on the last steps only it still removes the
+    /// one-frame pops the main decoder leaves.
+    pub refine_last_steps: Option<usize>,
     /// Penetration guidance and the number of final steps it acts on.
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub seed: u64,
@@ -135,6 +140,7 @@ pub fn sample_windows_with(
     let ts = shift.strided(opts.steps);
     for (i, &t) in ts.iter().enumerate() {
         let s = ts.get(i + 1).copied().unwrap_or(0);
+        let refine = opts.refine && opts.refine_last_steps.is_none_or(|k| ts.len() - i <= k);
         let mut x0 = if guided {
             let tt = vec![(t - 1) as f32; 2 * b];
             let both = net
@@ -142,7 +148,7 @@ pub fn sample_windows_with(
                     Tensor::cat(vec![d.clone(), d.clone()], 0),
                     &tt,
                     &prepared,
-                    opts.refine,
+                    refine,
                 )
                 .refined;
             let c = both.clone().narrow(0, 0, b);
@@ -150,7 +156,7 @@ pub fn sample_windows_with(
             u.clone() + (c - u) * opts.guidance
         } else {
             let tt = vec![(t - 1) as f32; b];
-            net.forward_prepared(d.clone(), &tt, &prepared, opts.refine)
+            net.forward_prepared(d.clone(), &tt, &prepared, refine)
                 .refined
         };
         if let (Some((g, last)), Some(p)) = (&opts.penetration, &pairs)

@@ -12,6 +12,7 @@ use dancegen_lodgepp::sampler::{HardCues, PddmSampleOptions, sample_windows};
 use dancegen_lodgepp::{Device, inference_device};
 use dancegen_motion::rotation::Mat3;
 use dancegen_nn::autoencoder::MotionAutoencoderConfig;
+use dancegen_nn::burn::module::Param;
 use dancegen_nn::burn::tensor::{Tensor, TensorData};
 use dancegen_nn::conv::ConvCodecConfig;
 use dancegen_nn::loss::FkSkeleton;
@@ -185,6 +186,7 @@ fn hard_cues_hold_exactly() {
         steps: 8,
         guidance: 2.0,
         refine: true,
+        refine_last_steps: None,
         penetration: None,
         seed: 1,
     };
@@ -204,6 +206,57 @@ fn hard_cues_hold_exactly() {
             assert_eq!(x[i], v[i]);
         }
     }
+}
+
+#[test]
+fn the_foot_refine_block_acts_on_the_last_steps_only_when_asked() {
+    let device = inference_device();
+    let grad = device.clone().autodiff();
+    let mut model = tiny_model(&device);
+    // A fresh block adds nothing (its output projection starts at zero): give it a visible
+    // refinement, as a trained one has.
+    let block = model
+        .pddm
+        .refine
+        .as_mut()
+        .expect("the tiny model has the block");
+    let w = block.output.weight.val();
+    block.output.weight = Param::from_tensor(w.ones_like() * 0.05);
+    let (b, t) = (1, WINDOW);
+    let music: Vec<f32> = (0..b * t * 35).map(|i| (i % 7) as f32 * 0.1).collect();
+    let cond = dancegen_lodgepp::denoiser::PddmCond {
+        music: Tensor::from_data(TensorData::new(music, [b, t, 35]), &device),
+        genre: vec![0],
+        primitives: Tensor::zeros([b, t, DIMS], &device),
+        mask: Tensor::zeros([b, t, 1], &device),
+        music_encoded: None,
+    };
+    let shift = model.config.pddm.shift.schedule();
+    let sample = |refine: bool, refine_last_steps: Option<usize>| -> Vec<f32> {
+        let opts = PddmSampleOptions {
+            steps: 8,
+            guidance: 2.0,
+            refine,
+            refine_last_steps,
+            penetration: None,
+            seed: 3,
+        };
+        sample_windows(&model.pddm, &shift, &cond, None, &opts, &device, &grad)
+            .into_data()
+            .convert::<f32>()
+            .try_to_vec::<f32>()
+            .unwrap()
+    };
+    let (off, every) = (sample(false, None), sample(true, None));
+    assert_ne!(off, every, "the block changes the sample");
+    assert_eq!(sample(true, Some(0)), off, "on no step = off");
+    assert_eq!(sample(true, Some(8)), every, "on all 8 steps = every step");
+    assert_eq!(sample(false, Some(2)), off, "refine = false wins");
+    let last_two = sample(true, Some(2));
+    assert!(
+        last_two != off && last_two != every,
+        "on the last 2 of 8 steps: in between"
+    );
 }
 
 #[test]

@@ -178,6 +178,7 @@ fn probe() -> Result<(), String> {
             steps: 50,
             guidance: g,
             refine: true,
+            refine_last_steps: None,
             penetration: None,
             seed: 3,
         };
