@@ -44,6 +44,8 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting hel
 # name, label, sampler (decides the seams)
 CONFIGS = [
     ("full", "ReactDance (full system: BLC + layer-wise guidance + separation)", "blc"),
+    ("no_foot_lock", "w/o foot lock (`--no-foot-lock`; the follower's root glides as generated)",
+     "blc"),
     ("no_separation", "w/o couple separation (`--no-separation`; the model's raw placement)",
      "blc"),
     ("no_beat_align", "w/o beat alignment (`--no-beat-align`; the follower's timing as generated)",
@@ -425,7 +427,7 @@ def cmd_report(args):
            "side only)")
     w(f"- **Boundary jerk** (↓; ≈ 1 = seams as smooth as the rest, ≫ 1 = pose jumps at the "
       f"seams): mean jerk within ±2 frames of the sampler's seams divided by the mean jerk "
-      f"elsewhere. BLC (full system, no_separation, single-scale CFG, m64, no_pm) has its seams at every "
+      f"elsewhere. BLC (every configuration but autoregressive) has its seams at every "
       f"block of 60 latent tokens ({real_window} frames for the 4-frame tokens), exactly "
       f"`dancegen eval --window <block>`'s grid, so eval's value is used as is. The "
       f"autoregressive sampler's seams are where each window's new half begins (after the "
@@ -449,6 +451,18 @@ def cmd_report(args):
       "(IPR 20.3 %, seed 0), because an arm round the partner's back gets pushed through the "
       "partner and neighbouring frames cancel, so such pushes now step back along the "
       "pelvis-to-pelvis line. Every row but no_separation has the separation on.")
+    w("- **no_foot_lock** leaves the follower's root as decoded. The foot lock (ours, not in the "
+      "paper: `dancegen_lodgepp::planted_feet::lock_planted_feet_leashed`, run before the beat "
+      "alignment and the separation) removes the horizontal glide of the support foot on "
+      "frames where the model's contact channel and nearness to the floor both say planted, "
+      "and gives that correction back with a 30-frame time constant, so the follower keeps the "
+      "place the model gives it beside the leader. Why: the model decodes the follower's "
+      "position relative to the leader, and real partners' relative motion cancels much of "
+      "the leader's travel while the model's does not, so its followers glide (pelvis "
+      "1.6 m/s against the real followers' 1.0 on these clips). Its rule and leash were chosen "
+      "on four training couples (docs/solo-data-v2.md, round eight). No leg IK: pinning each "
+      "contact run's feet raised MPJPE by 40 mm there and on these clips. Every row but "
+      "no_foot_lock has the foot lock on.")
     w("")
 
     # ---- generation time

@@ -8,8 +8,9 @@
 #
 # Environment (all optional):
 #   SEEDS="0 1 2"        seeds per configuration
-#   CONFIGS="full no_separation no_beat_align single_cfg autoregressive m64 no_pm"
+#   CONFIGS="full no_foot_lock no_separation no_beat_align single_cfg autoregressive m64 no_pm"
 #       full            MODEL, default sampling (BLC + layer-wise guidance) and couple separation
+#       no_foot_lock    MODEL, --no-foot-lock (the follower's root glides as generated)
 #       no_separation   MODEL, --no-separation (the follower where the model put it)
 #       no_beat_align   MODEL, --no-beat-align (the follower's timing as generated)
 #       single_cfg      MODEL, --guidance 2.0 (one scale s = 1 for every level, no LDCFG)
@@ -41,7 +42,7 @@ cd "$ROOT"
 source "$ROOT/tools/eval_lib.sh"
 parse_eval_args "$0" "$@"
 
-ALL_CONFIGS="full no_separation no_beat_align single_cfg autoregressive m64 no_pm"
+ALL_CONFIGS="full no_foot_lock no_separation no_beat_align single_cfg autoregressive m64 no_pm"
 SEEDS=${SEEDS:-"0 1 2"}
 CONFIGS=${CONFIGS:-$ALL_CONFIGS}
 MODEL=${MODEL:-$ROOT/models/reactdance-small}
@@ -86,7 +87,7 @@ rel() { # relative to the repository root if inside it, else absolute
 # ---- configurations: model directory and flags; skipped when the model does not exist
 model_of() {
     case $1 in
-        full|no_separation|no_beat_align|single_cfg|autoregressive) echo "$MODEL" ;;
+        full|no_foot_lock|no_separation|no_beat_align|single_cfg|autoregressive) echo "$MODEL" ;;
         m64) echo "$MODEL_M64" ;;
         no_pm) echo "$MODEL_NO_PM" ;;
     esac
@@ -94,6 +95,7 @@ model_of() {
 flags_of() {
     case $1 in
         full|m64|no_pm) echo "" ;;
+        no_foot_lock) echo "--no-foot-lock" ;;
         no_separation) echo "--no-separation" ;;
         no_beat_align) echo "--no-beat-align" ;;
         single_cfg) echo "--guidance 2.0" ;;
