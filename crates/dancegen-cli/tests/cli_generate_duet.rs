@@ -24,6 +24,29 @@ fn leader_bvh() -> String {
         .to_string()
 }
 
+/// The leader as the CLI reads it, written to `out` (.npy: world joints, .npz: SMPL motion).
+fn convert_leader(out: &str) {
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &leader_bvh(),
+        "--to",
+        "smpl24",
+        "--fps",
+        "30",
+        "-o",
+        out,
+    ]));
+}
+
+/// Mean horizontal pelvis-to-pelvis distance (m) of two `(T, 24, 3)` joint arrays.
+fn mean_pelvis_gap(f: &[f64], l: &[f64], t: usize) -> f64 {
+    (0..t)
+        .map(|k| ((f[k * 72] - l[k * 72]).powi(2) + (f[k * 72 + 2] - l[k * 72 + 2]).powi(2)).sqrt())
+        .sum::<f64>()
+        / t as f64
+}
+
 fn joints(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
     let a = dancegen_io::read_npy(path).unwrap();
     (a.shape, a.data)
@@ -35,17 +58,7 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
     // The leader as the CLI reads it: world joints (.npy) and SMPL motion (.npz).
     for name in ["leader.npy", "leader.npz"] {
-        ok(&dancegen(&[
-            "-q",
-            "convert",
-            &leader_bvh(),
-            "--to",
-            "smpl24",
-            "--fps",
-            "30",
-            "-o",
-            &out(name),
-        ]));
+        convert_leader(&out(name));
     }
     let o = dancegen(&[
         "-q",
@@ -74,15 +87,7 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     // ~0.7 m from the origin, so a follower left at its own origin would not fail this alone;
     // the moved-leader run below does.
     let t = fs[0];
-    let pelvis_gap = |f: &[f64], l: &[f64]| {
-        (0..t)
-            .map(|k| {
-                ((f[k * 72] - l[k * 72]).powi(2) + (f[k * 72 + 2] - l[k * 72 + 2]).powi(2)).sqrt()
-            })
-            .sum::<f64>()
-            / t as f64
-    };
-    let gap = pelvis_gap(&f, &l);
+    let gap = mean_pelvis_gap(&f, &l, t);
     assert!(gap < 1.5, "mean pelvis distance {gap} m");
     // The separation takes the follower out of the leader's body: far fewer frames with
     // trunks, heads, arms or legs overlapping than the model's raw placement
@@ -197,17 +202,7 @@ fn lowest_foot_glide(j: &[f64], t: usize) -> f64 {
 fn the_foot_lock_stops_the_follower_gliding_and_keeps_it_beside_the_leader() {
     let dir = tempfile::tempdir().unwrap();
     let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
-    ok(&dancegen(&[
-        "-q",
-        "convert",
-        &leader_bvh(),
-        "--to",
-        "smpl24",
-        "--fps",
-        "30",
-        "-o",
-        &out("leader.npy"),
-    ]));
+    convert_leader(&out("leader.npy"));
     let (song_s, leader_s) = (song(), leader_bvh());
     let run = |name: &str, extra: &[&str]| {
         let o = out(name);
@@ -233,15 +228,10 @@ fn the_foot_lock_stops_the_follower_gliding_and_keeps_it_beside_the_leader() {
     );
     // On its leash the follower stays where the model put it beside the leader: the mean
     // pelvis-to-pelvis distance changes by well under a step.
-    let gap = |f: &[f64]| {
-        (0..t)
-            .map(|k| {
-                ((f[k * 72] - l[k * 72]).powi(2) + (f[k * 72 + 2] - l[k * 72 + 2]).powi(2)).sqrt()
-            })
-            .sum::<f64>()
-            / t as f64
-    };
-    let (a, b) = (gap(&locked), gap(&free));
+    let (a, b) = (
+        mean_pelvis_gap(&locked, &l, t),
+        mean_pelvis_gap(&free, &l, t),
+    );
     assert!(
         (a - b).abs() < 0.3,
         "mean pelvis gap {a:.2} m locked, {b:.2} m free"
