@@ -207,14 +207,14 @@ pub struct SamplingDefaults {
     pub guidance: Vec<f64>,
     /// DDIM stochasticity (EDGE: 1; 0 = deterministic DDIM).
     pub eta: f64,
-    /// Keep the follower's planted feet in place (root lock on a leash, then leg IK;
+    /// Keep the follower's root from gliding over its planted feet (root lock on a leash;
     /// `dancegen_lodgepp::planted_feet`; post-processing, not part of ReactDance).
     pub foot_lock: bool,
     /// Time constant (frames) of the root lock's leash: a removed glide is given back over
     /// about this long, so the follower keeps the place the model gives it beside the leader.
     pub foot_lock_leash_frames: f64,
     /// When a follower's foot counts as planted: the model's contact channel and/or nearness
-    /// to the floor (`dancegen_lodgepp::planted_feet::PlantedRule`).
+    /// to the floor ([`PlantedRule`]).
     pub foot_lock_rule: PlantedRule,
 }
 
