@@ -93,6 +93,7 @@ impl DuetModel {
             .autoencoder
             .validate()
             .and_then(|_| config.denoiser.validate())
+            .and_then(|_| config.sampling.validate())
             .map_err(|r| invalid(&p, r))?;
         let need = |name: &str| -> Result<PathBuf, BundleError> {
             let f = dir.join(name);

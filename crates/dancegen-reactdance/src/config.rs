@@ -218,6 +218,19 @@ pub struct SamplingDefaults {
     pub foot_lock_rule: PlantedRule,
 }
 
+impl SamplingDefaults {
+    /// Values the sampler and the post-processing cannot use, named by their `model.toml` key.
+    pub fn validate(&self) -> Result<(), String> {
+        let leash = self.foot_lock_leash_frames;
+        if !(leash.is_finite() && leash > 0.0) {
+            return Err(format!(
+                "sampling.foot_lock_leash_frames must be a positive number of frames, not {leash}"
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SamplingDefaults {
     fn default() -> Self {
         Self {
@@ -248,4 +261,22 @@ pub const MUSIC_DIMS: usize = 35;
 
 pub fn music_token_dim(frames_per_token: usize) -> usize {
     MUSIC_DIMS * frames_per_token
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_leash_that_is_not_a_positive_number_of_frames_is_refused_by_name() {
+        assert!(SamplingDefaults::default().validate().is_ok());
+        for bad in [0.0, -30.0, f64::NAN, f64::INFINITY] {
+            let s = SamplingDefaults {
+                foot_lock_leash_frames: bad,
+                ..Default::default()
+            };
+            let e = s.validate().unwrap_err();
+            assert!(e.contains("sampling.foot_lock_leash_frames"), "{e}");
+        }
+    }
 }
