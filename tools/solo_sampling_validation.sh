@@ -5,8 +5,8 @@
 #
 #   MODEL=target/models/lodgepp-v6 bash tools/solo_sampling_validation.sh
 #
-# 12 dances: escape_from_chaosland.ogg and metal_madness.ogg, cuts 20-36 s and 60-76 s, seeds
-# 0-2, --genre salsa. Prints FID_k against the real training clips of REFERENCE, Div_k, the
+# 12 dances: escape_from_chaosland.ogg and metal_madness.ogg, cuts 20-36 s and 60-76 s (CUTS),
+# seeds 0-2, --genre salsa. Prints FID_k against the real training clips of REFERENCE, Div_k, the
 # share upside down, the mean BAS (Bailando variant, each clip against its cut's beats) and the
 # mean joint speeds (m/s) of pelvis, knee, ankle, elbow and wrist, for the model and the
 # reference.
@@ -15,7 +15,8 @@
 #   REFERENCE=target/solo-eval/gt_train (real training clips as (T, 24, 3) .npy, written by
 #   tools/solo_eval.sh), OUT=target/solo-validation/<model name>, GENRE=salsa,
 #   PYTHON=python3 with numpy, FLAGS="extra generate flags" (e.g. --no-foot-refine; give each
-#   flag set its own OUT).
+#   flag set its own OUT), CUTS="20:36 60:76" (start:end seconds of each song; both songs are
+#   longer than 140 s, so CUTS="20:36 60:76 100:116 120:136" doubles the set).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
@@ -32,7 +33,7 @@ $PYTHON -c "import numpy" 2>/dev/null || { echo "$PYTHON has no numpy (apt-get i
 mkdir -p "$OUT/dances" "$OUT/beats" "$OUT/eval"
 for song in escape_from_chaosland metal_madness; do
     [ -f "$OUT/features_$song.npy" ] || "$BIN" -q features "$SONGS/$song.ogg" -o "$OUT/features_$song.npy"
-    for cut in 20:36 60:76; do
+    for cut in ${CUTS:-20:36 60:76}; do
         s=${cut%:*}
         e=${cut#*:}
         # The cut's beats as generate sees them: beat frames in [30 s, 30 e), shifted to 0.
