@@ -218,16 +218,19 @@ fn the_foot_lock_stops_the_follower_gliding_and_keeps_it_beside_the_leader() {
     let (_, free) = run("free.npy", &["--no-foot-lock"]);
     let (_, l) = joints(&dir.path().join("leader.npy"));
     let t = shape[0];
-    // The lowest foot carries the weight: with the lock it glides far less. On the held-out
-    // couples the lock halves the follower's foot skating (PFC 12.3 -> 6.1,
-    // docs/duet-eval.md); here it must at least cut the glide by a quarter.
+    // The lowest foot carries the weight: with the lock it glides far less. With the shipped
+    // model, this leader and song (release build, 8 steps) it glided 0.92 m/s locked against
+    // 1.84 m/s free; on the held-out couples the lock halves PFC (12.3 -> 6.1,
+    // docs/duet-eval.md). "At least a quarter less" leaves room for another build's rounding
+    // and still fails if the lock does nothing.
     let (g_locked, g_free) = (lowest_foot_glide(&locked, t), lowest_foot_glide(&free, t));
     assert!(
         g_locked < 0.75 * g_free,
         "lowest foot's glide: {g_locked:.3} m/s locked, {g_free:.3} m/s free"
     );
     // On its leash the follower stays where the model put it beside the leader: the mean
-    // pelvis-to-pelvis distance changes by well under a step.
+    // pelvis-to-pelvis distance changes by well under a step (measured 0.90 m locked against
+    // 0.97 m free; an unleashed lock lets the glides it removes add up over the whole dance).
     let (a, b) = (
         mean_pelvis_gap(&locked, &l, t),
         mean_pelvis_gap(&free, &l, t),

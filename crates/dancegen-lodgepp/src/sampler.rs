@@ -40,9 +40,9 @@ pub struct PddmSampleOptions {
     /// Use the Foot Refine Block.
     pub refine: bool,
     /// Final denoising steps the Foot Refine Block acts on (`None`: every step, as Lodge++).
-    /// The block's training terms (FK velocity, acceleration, contact) damp the whole body, and
-    /// at every step that damping compounds; on the last steps only it still removes the
-    /// one-frame pops the main decoder leaves.
+    /// Fewer steps leave the dance faster (the block slows the whole body), but on the training
+    /// songs every N tried scored a worse FID_k than every step (docs/solo-data-v2.md, round
+    /// eight), so no shipped model sets it.
     pub refine_last_steps: Option<usize>,
     /// Penetration guidance and the number of final steps it acts on.
     pub penetration: Option<(PenetrationGuidance, usize)>,

@@ -214,7 +214,8 @@ mod tests {
         // back per frame)...
         assert!((l[1][0] - raw[1][0]).abs() < 1e-6);
         assert!(l[10][0] < -0.07, "{}", l[10][0]);
-        // ...and afterwards the correction returns to the model's own place.
+        // ...and afterwards the correction returns to the model's own place: what is left at
+        // frame 99 is at most the 10 cm glide decayed over the 89 frames since it ended.
         assert!(
             l[99][0].abs() < 0.01 * (-89.0f32 / 15.0).exp() * 10.0,
             "{}",
