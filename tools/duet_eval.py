@@ -43,7 +43,8 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting hel
 
 # name, label, sampler (decides the seams)
 CONFIGS = [
-    ("full", "ReactDance (full system: BLC + layer-wise guidance + separation)", "blc"),
+    ("full", "ReactDance (full system: BLC + layer-wise guidance; foot lock, beat alignment, "
+     "separation)", "blc"),
     ("no_foot_lock", "w/o foot lock (`--no-foot-lock`; the follower's root glides as generated)",
      "blc"),
     ("no_separation", "w/o couple separation (`--no-separation`; the model's raw placement)",
