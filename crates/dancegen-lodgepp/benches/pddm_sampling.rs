@@ -172,6 +172,7 @@ fn main() {
         guidance: GUIDANCE,
         refine: true,
         refine_last_steps: None,
+        refine_scope: Default::default(),
         penetration: penetration.then(|| (PenetrationGuidance::default(), PENETRATION_STEPS)),
         seed: 0,
     };

@@ -62,6 +62,8 @@ pub struct SamplingDefaults {
     pub foot_lock_rule: crate::planted_feet::PlantedRule,
     /// Final denoising steps the Foot Refine Block acts on (absent: every step, as Lodge++).
     pub foot_refine_steps: Option<usize>,
+    /// Channels the Foot Refine Block's refinement is added to (absent: `all`, as Lodge++).
+    pub foot_refine_scope: crate::foot_refine::FootRefineScope,
 }
 
 impl Default for SamplingDefaults {
@@ -78,6 +80,7 @@ impl Default for SamplingDefaults {
             foot_lock: true,
             foot_lock_rule: crate::planted_feet::PlantedRule::Either,
             foot_refine_steps: None,
+            foot_refine_scope: crate::foot_refine::FootRefineScope::All,
         }
     }
 }

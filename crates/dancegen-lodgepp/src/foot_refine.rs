@@ -20,6 +20,40 @@ use burn::tensor::{Device, Tensor, TensorData};
 use crate::kinematics::{Denormalize, displacement, feet, joints};
 use crate::layout::CONTACTS;
 
+/// Which channels the Foot Refine Block's refinement is added to at sampling time.
+///
+/// Lodge++ adds it to every channel (`All`). Training puts the FK joint, velocity, acceleration
+/// and contact terms on the refined output only, so the block also learns to slow the arms and
+/// the trunk (docs/solo-data-v2.md, round seven). `Legs` keeps the refinement on the channels
+/// that place the feet ([`crate::layout::leg_channels`]) and leaves the rest of the body as the
+/// main decoder predicted it. Not part of Lodge++.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FootRefineScope {
+    #[default]
+    All,
+    Legs,
+}
+
+impl FootRefineScope {
+    /// `[1, 1, 151]` weights of the refinement (1 where it applies), or `None` for all channels.
+    pub fn mask(self, device: &Device) -> Option<Tensor<3>> {
+        match self {
+            FootRefineScope::All => None,
+            FootRefineScope::Legs => {
+                let mut m = vec![0f32; crate::layout::DIMS];
+                for c in crate::layout::leg_channels() {
+                    m[c] = 1.0;
+                }
+                Some(Tensor::from_data(
+                    TensorData::new(m, [1, 1, crate::layout::DIMS]),
+                    device,
+                ))
+            }
+        }
+    }
+}
+
 /// Features per frame.
 pub const FOOT_FEATURES: usize = 32;
 /// Contact height thresholds (m) of ankles and toes: LODGE's preprocessing labels (D.2/C.3:

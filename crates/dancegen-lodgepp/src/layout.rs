@@ -30,6 +30,24 @@ pub fn main_channels() -> Vec<usize> {
         .collect()
 }
 
+/// SMPL joints whose rotation places the feet: pelvis 0, hips 1/2, knees 4/5, ankles 7/8,
+/// feet 10/11.
+pub const LEG_JOINTS: [usize; 9] = [0, 1, 2, 4, 5, 7, 8, 10, 11];
+
+/// The channels that decide where the feet are and whether they touch the floor: contacts,
+/// root position and the 6D of [`LEG_JOINTS`] (what the Foot Refine Block may change under
+/// `FootRefineScope::Legs`).
+pub fn leg_channels() -> Vec<usize> {
+    let mut c: Vec<usize> = CONTACTS.chain(ROOT_HORIZONTAL).collect();
+    c.push(ROOT_HEIGHT);
+    c.extend(
+        LEG_JOINTS
+            .iter()
+            .flat_map(|&j| (0..6).map(move |k| rot6d(j, k))),
+    );
+    c
+}
+
 /// Every channel except the root's horizontal position (what a hard boundary cue fixes at a
 /// window's tail, where the absolute position is not known in advance).
 pub fn all_but_root_horizontal() -> Vec<usize> {
@@ -47,5 +65,16 @@ mod tests {
         assert_eq!(&c[..6], &[7, 8, 9, 10, 11, 12]);
         assert_eq!(c[6], 7 + 6 * 16);
         assert!(c.iter().all(|&x| x < DIMS));
+    }
+
+    #[test]
+    fn leg_channels_are_contacts_root_position_and_the_leg_rotations() {
+        let c = leg_channels();
+        assert_eq!(c.len(), 4 + 3 + 6 * LEG_JOINTS.len());
+        assert_eq!(&c[..7], &[0, 1, 2, 3, 4, 5, 6]);
+        // Pelvis 6D first, the right foot's (joint 11) last; no arm channel.
+        assert_eq!(c[7], rot6d(0, 0));
+        assert_eq!(*c.last().unwrap(), rot6d(11, 5));
+        assert!(!c.contains(&rot6d(18, 0)) && !c.contains(&rot6d(3, 0)));
     }
 }

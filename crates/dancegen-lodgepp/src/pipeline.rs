@@ -51,6 +51,8 @@ pub struct GenerateOptions {
     pub refine: bool,
     /// Final denoising steps the Foot Refine Block acts on (`None`: all).
     pub refine_last_steps: Option<usize>,
+    /// Channels the Foot Refine Block's refinement is added to.
+    pub refine_scope: crate::foot_refine::FootRefineScope,
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub gpt: SamplingOptions,
     pub max_beat_shift: usize,
@@ -73,6 +75,7 @@ impl GenerateOptions {
             sampler: Sampler::Lodgepp,
             refine: true,
             refine_last_steps: s.foot_refine_steps,
+            refine_scope: s.foot_refine_scope,
             penetration: Some((
                 PenetrationGuidance {
                     scale: s.penetration_scale,
@@ -269,6 +272,7 @@ impl SoloModel {
             guidance: opts.guidance,
             refine: opts.refine,
             refine_last_steps: opts.refine_last_steps,
+            refine_scope: opts.refine_scope,
             penetration: opts.penetration,
             seed,
         }

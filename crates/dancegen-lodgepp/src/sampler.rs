@@ -11,7 +11,8 @@ use dancegen_nn::progress::{self, Cancelled, DENOISING, NoHook, StepHook};
 
 use burn::tensor::{Device, Tensor};
 
-use crate::denoiser::{PddmCond, PddmDenoiser};
+use crate::denoiser::{PddmCond, PddmDenoiser, PddmOutput};
+pub use crate::foot_refine::FootRefineScope;
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 
 /// Frames and channels fixed to known values after every step.
@@ -44,6 +45,8 @@ pub struct PddmSampleOptions {
     /// songs every N tried scored a worse FID_k than every step (docs/solo-data-v2.md, round
     /// eight), so no shipped model sets it.
     pub refine_last_steps: Option<usize>,
+    /// Channels the refinement is added to.
+    pub refine_scope: FootRefineScope,
     /// Penetration guidance and the number of final steps it acts on.
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub seed: u64,
@@ -138,26 +141,29 @@ pub fn sample_windows_with(
     };
     let pairs = opts.penetration.map(|_| CapsulePairs::new());
     let ts = shift.strided(opts.steps);
+    let scope = opts.refine_scope.mask(device);
+    // x̂0 of one forward: the refined output, or the main one plus the refinement on `scope`.
+    let x0_of = |out: PddmOutput| match &scope {
+        Some(m) => out.main.clone() + (out.refined - out.main) * m.clone(),
+        None => out.refined,
+    };
     for (i, &t) in ts.iter().enumerate() {
         let s = ts.get(i + 1).copied().unwrap_or(0);
         let refine = opts.refine && opts.refine_last_steps.is_none_or(|k| ts.len() - i <= k);
         let mut x0 = if guided {
             let tt = vec![(t - 1) as f32; 2 * b];
-            let both = net
-                .forward_prepared(
-                    Tensor::cat(vec![d.clone(), d.clone()], 0),
-                    &tt,
-                    &prepared,
-                    refine,
-                )
-                .refined;
+            let both = x0_of(net.forward_prepared(
+                Tensor::cat(vec![d.clone(), d.clone()], 0),
+                &tt,
+                &prepared,
+                refine,
+            ));
             let c = both.clone().narrow(0, 0, b);
             let u = both.narrow(0, b, b);
             u.clone() + (c - u) * opts.guidance
         } else {
             let tt = vec![(t - 1) as f32; b];
-            net.forward_prepared(d.clone(), &tt, &prepared, refine)
-                .refined
+            x0_of(net.forward_prepared(d.clone(), &tt, &prepared, refine))
         };
         if let (Some((g, last)), Some(p)) = (&opts.penetration, &pairs)
             && ts.len() - i <= *last

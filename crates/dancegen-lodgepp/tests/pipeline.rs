@@ -4,11 +4,11 @@
 
 use dancegen_lodgepp::bundle::{BundleConfig, GptSection, MeanStd, SamplingDefaults, SoloModel};
 use dancegen_lodgepp::config::{ChoreoGptConfig, PddmConfig, PddmTable};
-use dancegen_lodgepp::layout::{DIMS, MAIN_DIMS, rot6d};
+use dancegen_lodgepp::layout::{DIMS, MAIN_DIMS, leg_channels, rot6d};
 use dancegen_lodgepp::library::PrimitiveLibrary;
 use dancegen_lodgepp::penetration::{CapsulePairs, PenetrationGuidance, guide, penetration_energy};
 use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
-use dancegen_lodgepp::sampler::{HardCues, PddmSampleOptions, sample_windows};
+use dancegen_lodgepp::sampler::{FootRefineScope, HardCues, PddmSampleOptions, sample_windows};
 use dancegen_lodgepp::{Device, inference_device};
 use dancegen_motion::rotation::Mat3;
 use dancegen_nn::autoencoder::MotionAutoencoderConfig;
@@ -187,6 +187,7 @@ fn hard_cues_hold_exactly() {
         guidance: 2.0,
         refine: true,
         refine_last_steps: None,
+        refine_scope: Default::default(),
         penetration: None,
         seed: 1,
     };
@@ -209,7 +210,7 @@ fn hard_cues_hold_exactly() {
 }
 
 #[test]
-fn the_foot_refine_block_acts_on_the_last_steps_only_when_asked() {
+fn the_foot_refine_block_acts_on_the_steps_and_channels_asked() {
     let device = inference_device();
     let grad = device.clone().autodiff();
     let mut model = tiny_model(&device);
@@ -232,12 +233,17 @@ fn the_foot_refine_block_acts_on_the_last_steps_only_when_asked() {
         music_encoded: None,
     };
     let shift = model.config.pddm.shift.schedule();
-    let sample = |refine: bool, refine_last_steps: Option<usize>| -> Vec<f32> {
+    let sample_with = |steps: usize,
+                       refine: bool,
+                       refine_last_steps: Option<usize>,
+                       refine_scope: FootRefineScope|
+     -> Vec<f32> {
         let opts = PddmSampleOptions {
-            steps: 8,
+            steps,
             guidance: 2.0,
             refine,
             refine_last_steps,
+            refine_scope,
             penetration: None,
             seed: 3,
         };
@@ -246,6 +252,9 @@ fn the_foot_refine_block_acts_on_the_last_steps_only_when_asked() {
             .convert::<f32>()
             .try_to_vec::<f32>()
             .unwrap()
+    };
+    let sample = |refine: bool, refine_last_steps: Option<usize>| {
+        sample_with(8, refine, refine_last_steps, FootRefineScope::All)
     };
     let (off, every) = (sample(false, None), sample(true, None));
     assert_ne!(off, every, "the block changes the sample");
@@ -257,6 +266,27 @@ fn the_foot_refine_block_acts_on_the_last_steps_only_when_asked() {
         last_two != off && last_two != every,
         "on the last 2 of 8 steps: in between"
     );
+
+    // One step: the sample is that step's x̂0, so the scope shows channel by channel. `Legs`
+    // takes the refined values on the leg channels and the main decoder's elsewhere.
+    let one = |refine: bool, scope| sample_with(1, refine, None, scope);
+    let off1 = one(false, FootRefineScope::All);
+    let every1 = one(true, FootRefineScope::All);
+    let legs1 = one(true, FootRefineScope::Legs);
+    let legs = leg_channels();
+    for (i, &v) in legs1.iter().enumerate() {
+        let want = if legs.contains(&(i % DIMS)) {
+            every1[i]
+        } else {
+            off1[i]
+        };
+        assert!(
+            (v - want).abs() <= 1e-5 * (1.0 + want.abs()),
+            "value {i}: {v} vs {want}"
+        );
+    }
+    assert_ne!(legs1, off1, "the legs are refined");
+    assert_ne!(legs1, every1, "the arms are not");
 }
 
 #[test]

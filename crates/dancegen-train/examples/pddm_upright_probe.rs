@@ -179,6 +179,7 @@ fn probe() -> Result<(), String> {
             guidance: g,
             refine: true,
             refine_last_steps: None,
+            refine_scope: Default::default(),
             penetration: None,
             seed: 3,
         };
