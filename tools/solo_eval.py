@@ -336,13 +336,16 @@ def cmd_report(args):
         return seg, lng, setm, setm_all, done
 
     seg, lng, setm, setm_all, done = collect(out, configs)
-    base = None
-    if args.baseline:
+    # Earlier runs to compare with, oldest first: (OUT, label, segments, 29-clip set, seeds).
+    bases = []
+    labels = args.baseline_label or []
+    for i, b_out in enumerate(args.baseline or []):
         full_cfg = [c for c in CONFIGS if c[0] == "full"]
-        b_seg, _, _, b_all, b_done = collect(args.baseline, full_cfg)
+        b_seg, _, _, b_all, b_done = collect(b_out, full_cfg)
         if len(b_done["full"]) == 0:
-            sys.exit(f"--baseline {args.baseline}: no evaluated full-system seed in it")
-        base = (b_seg["full"], b_all["full"], b_done["full"])
+            sys.exit(f"--baseline {b_out}: no evaluated full-system seed in it")
+        label = labels[i] if i < len(labels) else "the earlier model"
+        bases.append((b_out, label, b_seg["full"], b_all["full"], b_done["full"]))
 
     # ---- render
     L = []
@@ -554,13 +557,14 @@ def cmd_report(args):
             rows.append((f"penetration lower with guidance than without ({where})", "full",
                          "full vs w/o penetration guidance",
                          f"{fmt(a, sa, 3)} % vs {fmt(b, sb, 3)} %{note}", ok))
-    if base is not None and "full" in seg:
-        b_seg, b_all, b_done = base
-        w(f"## Before and after: {args.baseline_label}")
+    if bases and "full" in seg:
+        w("## Before and after")
         w("")
-        w(f"The full system of this run against the full system of `{args.baseline}` "
-          f"({args.baseline_label}; seeds {' '.join(b_done)}), on the same held-out segments, "
-          f"beats and {n_all} real clips.")
+        w("The full system of this run against the full system of earlier runs, on the same "
+          f"held-out segments, beats and {n_all} real clips:")
+        w("")
+        for b_out, label, _, _, b_done in bases:
+            w(f"- {label}: `{b_out}` (seeds {' '.join(b_done)})")
         w("")
         cols = [("bas", "BAS ↑", 4, 1.0), ("fsr", "FSR % ↓", 2, 100.0),
                 ("boundary_jerk", "Boundary jerk ↓", 3, 1.0),
@@ -570,12 +574,15 @@ def cmd_report(args):
         r = dict(real)
         r.update({k + "_all": v for k, v in set_real["held_all"].items()})
         r["div_k_all"] = set_real["held_all"].get("div_k")
-        before = {k: stats(v)[:2] for k, v in b_seg.items()}
-        before.update({k + "_all": stats(v)[:2] for k, v in b_all.items()})
+        rows_ba = [("real data (held-out motion)", r)]
+        for _, label, b_seg, b_all, _ in bases:
+            before = {k: stats(v)[:2] for k, v in b_seg.items()}
+            before.update({k + "_all": stats(v)[:2] for k, v in b_all.items()})
+            rows_ba.append((f"before: {label}", before))
         after = {k: stats(v)[:2] for k, v in seg["full"].items()}
         after.update({k + "_all": stats(v)[:2] for k, v in setm_all["full"].items()})
-        table(cols, [("real data (held-out motion)", r), (f"before: {args.baseline_label}", before),
-                     ("after: this run's model", after)])
+        rows_ba.append(("after: this run's model", after))
+        table(cols, rows_ba)
         w("Issue 16's targets: BAS ≥ 0.35, Div_k ≥ 4.5, FID_k (all real) ≤ 92; boundary jerk "
           "< 1.5 and FSR ≤ real.")
         w("")
@@ -720,9 +727,11 @@ def main():
     p.add_argument("--long", action="store_true")
     p.add_argument("--dry-run", action="store_true")
     p.add_argument("--report", required=True)
-    p.add_argument("--baseline", help="an earlier run's OUT directory: its full system is "
-                   "compared with this run's in a before/after table")
-    p.add_argument("--baseline-label", default="the earlier model")
+    p.add_argument("--baseline", action="append",
+                   help="an earlier run's OUT directory: its full system is compared with this "
+                   "run's in a before/after table (repeatable, oldest first)")
+    p.add_argument("--baseline-label", action="append",
+                   help="names the --baseline of the same position")
     p.set_defaults(func=cmd_report)
     a = ap.parse_args()
     a.func(a)

@@ -19,7 +19,8 @@
 #   PYTHON=python3 (3.11+, standard library only)
 #   SEED_NOTE="..." a sentence added to the report (e.g. why fewer seeds were used)
 #   BASELINE=DIR         an earlier run's OUT (e.g. of the previously shipped model): the report adds
-#                        a before/after table of the two full systems; BASELINE_LABEL names it
+#                        a before/after table of the two full systems; BASELINE_LABEL names it;
+#                        BASELINE2 / BASELINE2_LABEL add a second, later one
 #   FRESH=1              regenerate everything (otherwise outputs of the same model are reused)
 #
 # --dry-run: no model; each "generated" clip is the held-out real motion, shifted per seed (tests
@@ -252,6 +253,7 @@ RFLAGS=()
 [ "$LONG" = 1 ] && RFLAGS+=(--long)
 [ "$DRY" = 1 ] && RFLAGS+=(--dry-run)
 [ -n "${BASELINE:-}" ] && RFLAGS+=(--baseline "$BASELINE" --baseline-label "${BASELINE_LABEL:-the earlier model}")
+[ -n "${BASELINE2:-}" ] && RFLAGS+=(--baseline "$BASELINE2" --baseline-label "${BASELINE2_LABEL:-a second earlier model}")
 $HELP report --out "$OUT" --seeds "$SEEDS" --configs "$CONFIGS" --window "$WINDOW" \
     "${RFLAGS[@]}" --report "$REPORT"
 log "done in $((WALL / 60)) min $((WALL % 60)) s"
