@@ -114,6 +114,35 @@ impl TimeMap {
         )
     }
 
+    /// `next` after `self`: the map `t ↦ next.forward(self.forward(t))`, exact everywhere.
+    /// Its knots are `self`'s anchors and the motion times `next`'s anchors come from, plus one
+    /// point beyond each end, so the extensions have the composed rates too.
+    pub fn then(&self, next: &TimeMap) -> TimeMap {
+        let mut knots: Vec<f64> = self.anchors.iter().map(|&(t, _)| t).collect();
+        knots.extend(next.anchors.iter().map(|&(u, _)| self.inverse(u)));
+        knots.sort_by(f64::total_cmp);
+        knots.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        let (Some(&first), Some(&last)) = (knots.first(), knots.last()) else {
+            // Neither map has an anchor: both are shifts.
+            return TimeMap::shift(next.forward(self.forward(0.0)));
+        };
+        let mut ts = vec![first - 1.0];
+        ts.extend(knots);
+        ts.push(last + 1.0);
+        TimeMap::through(
+            ts.into_iter()
+                .map(|t| (t, next.forward(self.forward(t))))
+                .collect(),
+        )
+    }
+
+    /// Whether every piece's rate lies within `p`'s limits (up to rounding).
+    pub fn within(&self, p: &WarpParams) -> bool {
+        self.rates()
+            .iter()
+            .all(|&r| r >= p.min_rate * (1.0 - 1e-9) && r <= p.max_rate * (1.0 + 1e-9))
+    }
+
     /// Rate of every piece, including the two extensions: `[before, segments..., after]`.
     pub fn rates(&self) -> Vec<f64> {
         let mut r = vec![self.rate_before];
@@ -602,5 +631,27 @@ mod tests {
         // The song's end cuts the warped motion.
         let (_, short) = warp_motion(&m, &map, 50);
         assert_eq!(short.frames(), 20);
+    }
+
+    /// Composition is exact: inside the anchors, on the extensions, and with a shift.
+    #[test]
+    fn then_composes_two_maps() {
+        let a = TimeMap::through(vec![(0.0, 0.0), (1.0, 1.1), (3.0, 2.9), (4.0, 4.0)]);
+        let b = TimeMap::through(vec![(0.0, 0.0), (2.0, 1.8), (4.0, 4.0)]);
+        let c = a.then(&b);
+        for k in -20..=60 {
+            let t = f64::from(k) / 10.0;
+            let want = b.forward(a.forward(t));
+            assert!(
+                (c.forward(t) - want).abs() < 1e-9,
+                "t = {t}: {} vs {want}",
+                c.forward(t)
+            );
+        }
+        let shifted = TimeMap::shift(0.5).then(&TimeMap::shift(-0.2));
+        assert!((shifted.forward(2.0) - 2.3).abs() < 1e-12);
+        assert!(a.within(&WarpParams::default()));
+        let fast = TimeMap::through(vec![(0.0, 0.0), (1.0, 1.5), (2.0, 2.0)]);
+        assert!(!fast.within(&WarpParams::default()));
     }
 }

@@ -284,6 +284,8 @@ impl DanceSystem for Duet {
             follower = aligned;
             tracing::info!(
                 matched = a.matched,
+                met_before = a.met_before,
+                passes = a.passes,
                 follower_beats = a.motion_beats,
                 leader_beats = a.target_beats,
                 max_tempo_change = a.max_tempo_change,

@@ -122,6 +122,8 @@ impl DanceSystem for Solo {
             keep_feet_above_floor(&mut motion).map_err(GenerateError::Generation)?;
             tracing::info!(
                 matched = a.matched,
+                met_before = a.met_before,
+                passes = a.passes,
                 motion_beats = a.motion_beats,
                 music_beats = a.target_beats,
                 max_tempo_change = a.max_tempo_change,
