@@ -45,10 +45,11 @@ pub struct BeatAlignment {
     pub met_before: usize,
     /// Target beats met by a kinematic beat of the aligned dance (its beats found again).
     pub matched: usize,
-    /// Bailando's beat-align score of the dance's kinematic beats against the target beats
-    /// inside it (Gaussian tolerance σ = 3 frames, `dancegen_metrics::bas`): how close each
-    /// target beat is to a motion beat. Before and after the alignment.
+    /// [`Self::score`] of the dance before alignment.
     pub score_before: f64,
+    /// Bailando's beat-align score of the aligned dance's kinematic beats against the target
+    /// beats inside it (Gaussian tolerance σ = 3 frames, `dancegen_metrics::bas`): how close
+    /// each target beat is to a motion beat, averaged over the target beats.
     pub score: f64,
     /// Passes whose warp was kept (0: the dance is returned unchanged).
     pub passes: usize,
