@@ -117,6 +117,13 @@ pub struct DenoiserConfig {
     pub causal: bool,
     /// Diffusion steps of the cosine schedule in training.
     pub timesteps: usize,
+    /// Also feed each encoded leader token to the decoder as a FiLM vector of the follower
+    /// token at the same time (added to the music's), besides the paper's cross-attention.
+    /// Ours, not ReactDance's: with the cross-attention alone the follower's timing is
+    /// unrelated to the leader's (held-out Beat Echo Degree without the beat alignment 0.21,
+    /// about what random beats score; docs/solo-data-v2.md, round ten). `false` is the paper's
+    /// design and the default for bundles without the key.
+    pub leader_film: bool,
 }
 
 impl Default for DenoiserConfig {
@@ -131,6 +138,7 @@ impl Default for DenoiserConfig {
             block_tokens: 60,
             causal: false,
             timesteps: 1000,
+            leader_film: false,
         }
     }
 }

@@ -13,6 +13,10 @@
 //! - `n_layers` FiLM decoder layers ([`FilmDecoderLayer`], shared with Lodge++ / EDGE), then
 //!   `Linear(d → C)`.
 //!
+//! - Optional (`leader_film`, ours): the encoded leader token of the same time is also a FiLM
+//!   vector, `Linear(d → d)`, added to the music's, so the follower token at time `n` is
+//!   modulated by the leader at `n` without having to find it by attention.
+//!
 //! The leader and the music are dropped together (the paper's null embedding `∅` replaces
 //! `(c, M_L)`).
 
@@ -53,6 +57,8 @@ pub struct LatentDenoiser {
     pub music_norm: LayerNorm,
     pub music_in: Linear,
     pub null_music: Param<Tensor<3>>,
+    /// The per-token leader FiLM (`DenoiserConfig::leader_film`); `None` in the paper's design.
+    pub leader_film: Option<Linear>,
     pub layers: Vec<FilmDecoderLayer>,
     pub output: Linear,
     #[module(skip)]
@@ -89,6 +95,9 @@ impl DenoiserConfig {
             music_norm: LayerNormConfig::new(music).init(device),
             music_in: LinearConfig::new(music, d).init(device),
             null_music: Param::from_tensor(Tensor::zeros([1, 1, d], device)),
+            leader_film: self
+                .leader_film
+                .then(|| LinearConfig::new(d, d).init(device)),
             layers: (0..self.n_layers)
                 .map(|_| {
                     FilmDecoderLayerConfig::new(d, self.n_heads, self.d_ff)
@@ -111,7 +120,8 @@ pub struct PreparedCond {
     pub memory: Tensor<3>,
     /// Each decoder layer's key/value projections of `memory` (inference only).
     pub memory_kv: Option<Vec<ProjectedKv>>,
-    /// Music FiLM vectors `[B, N, d]` (or the null vector `[B, 1, d]`).
+    /// Per-token FiLM vectors `[B, N, d]`: the music's, plus the leader's with `leader_film`
+    /// (or the null vector `[B, 1, d]`).
     pub music: Tensor<3>,
 }
 
@@ -215,6 +225,14 @@ impl LatentDenoiser {
                 .music_in
                 .forward(self.music_norm.forward(c.music.clone()));
             mix(m, null_music)
+        };
+        let music = match &self.leader_film {
+            None => music,
+            // The null branch: one vector for every token, like the null music.
+            Some(film) if keep.iter().all(|&k| !k) => {
+                music + film.forward(self.null_leader.val().expand([b, 1, d]))
+            }
+            Some(film) => music + film.forward(memory.clone()),
         };
         let memory_kv = project.then(|| {
             self.layers

@@ -10,7 +10,7 @@ use dancegen_reactdance::blc::{
 use dancegen_reactdance::config::{DenoiserConfig, leader_token_dim, music_token_dim};
 use dancegen_reactdance::denoiser::{DuetCond, Layout};
 
-fn small(causal: bool) -> DenoiserConfig {
+fn small(causal: bool, leader_film: bool) -> DenoiserConfig {
     DenoiserConfig {
         d_model: 32,
         n_layers: 2,
@@ -21,6 +21,7 @@ fn small(causal: bool) -> DenoiserConfig {
         block_tokens: 6,
         causal,
         timesteps: 100,
+        leader_film,
     }
 }
 
@@ -30,11 +31,11 @@ fn max_abs(a: Tensor<3>, b: Tensor<3>) -> f32 {
 
 #[test]
 fn block_masked_sequence_equals_batched_blocks() {
-    for causal in [false, true] {
+    for (causal, leader_film) in [(false, false), (true, false), (false, true)] {
         let dev = device::inference();
         dev.seed(3);
         let (c, f, blocks) = (12, 4, 3);
-        let net = small(causal).init(c, f, &dev);
+        let net = small(causal, leader_film).init(c, f, &dev);
         let n = 6 * blocks;
         let normal = Distribution::Normal(0.0, 1.0);
         let cond = DuetCond {
@@ -58,7 +59,8 @@ fn block_masked_sequence_equals_batched_blocks() {
         let d = max_abs(seq, batched.reshape([1, n, c]));
         assert!(
             d < 1e-4,
-            "causal = {causal}: sequence and batched blocks differ by {d}"
+            "causal = {causal}, leader FiLM = {leader_film}: sequence and batched blocks \
+             differ by {d}"
         );
     }
 }
@@ -81,7 +83,7 @@ fn both_long_form_samplers_fill_every_token() {
     let dev = device::inference();
     dev.seed(5);
     let (c, f) = (12, 4);
-    let net = small(false).init(c, f, &dev);
+    let net = small(false, false).init(c, f, &dev);
     let schedule = Schedule::new(BetaSchedule::Cosine, 100);
     let normal = Distribution::Normal(0.0, 1.0);
     // 17 tokens: not a whole number of 6-token blocks.
