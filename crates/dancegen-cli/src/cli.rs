@@ -44,7 +44,9 @@ pub enum Command {
     Batch(BatchArgs),
     /// List the models found and where they were looked for, or install models.
     Models(ModelsArgs),
-    /// Assemble a Lodge++ model directory from its three training runs.
+    /// Assemble a model directory from its finished training runs (solo: --vqvae --gpt --pddm;
+    /// duet: --hfsq --ldm; group: --group; holistic: --holistic-vq --holistic-mmr
+    /// --holistic-generator).
     Bundle(BundleArgs),
     /// The web app: upload a song, follow the progress, watch the dance in 3D in time with
     /// the music, download it (http://127.0.0.1:8080 by default).
