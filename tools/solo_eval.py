@@ -408,6 +408,22 @@ def cmd_report(args):
         w(f"  Check: the real clips' BAS reproduces the `bas_after` the data set builder recorded "
           f"for them (largest difference {max(diffs):.1e}), so the beats are the ones the warp "
           f"aligned the motion to.")
+    # The real BAS is a property of the pseudo-pairing (the warp that put the motion on its
+    # song's beats), so it is shown for every real clip, not only the held-out ones.
+    warps = {c: man[c]["warp"] for c in man if "warp" in man[c]}
+    train_warps = [v for c, v in warps.items() if c not in clips]
+    held_warps = [warps[c] for c in clips if c in warps]
+    if train_warps and held_warps:
+        def spread(key, ws):
+            v = [x[key] for x in ws]
+            sd = f" ± {statistics.stdev(v):.3f}" if len(v) > 1 else ""
+            return f"{statistics.fmean(v):.3f}{sd} ({min(v):.3f}–{max(v):.3f})"
+        w(f"  For scale, from the data set manifest: the same warp gave the {len(train_warps)} "
+          f"training clips a BAS of {spread('bas_after', train_warps)} (before the warp "
+          f"{spread('bas_before', train_warps)}), and the {len(held_warps)} held-out clips "
+          f"{spread('bas_after', held_warps)} (before {spread('bas_before', held_warps)}). The "
+          f"real row's BAS is that of these {len(held_warps)} pairings, so it is higher than what "
+          f"the model saw on average.")
     w(f"- **Boundary jerk**: `dancegen eval --window N` puts its boundaries at multiples of N "
       f"(default 150, EDGE's 5 s windows), but these samplers' seams are not evenly spaced, so "
       f"the ratio is recomputed by "
