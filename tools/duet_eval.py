@@ -426,6 +426,21 @@ def cmd_report(args):
       "realistically the follower is placed relative to its leader.")
     w("- **BED** (↑, Duolando's Beat Echo Degree): how well the follower's motion beats echo "
       "the leader's (1 = every leader beat has a follower beat on it).")
+    bed_all = os.path.join(out, "eval", "real_all_bed.json")
+    if os.path.exists(bed_all):
+        # Every real couple of the reference set, so the held-out couples' BED can be read in
+        # scale (`dancegen eval --pred gt_all --leader gt_leader_all --metrics bed`).
+        per = {os.path.splitext(os.path.basename(c["file"]))[0]: c.get("bed")
+               for c in load(bed_all)["per_clip"]}
+        def spread(vals):
+            vals = [v for v in vals if v is not None]
+            sd = f" ± {statistics.stdev(vals):.3f}" if len(vals) > 1 else ""
+            return f"{statistics.fmean(vals):.3f}{sd} ({min(vals):.3f}–{max(vals):.3f})"
+        rest = [v for c, v in per.items() if c not in clips]
+        if rest:
+            w(f"  For scale: the {len(rest)} other real couples of the reference set (the "
+              f"training couples) have a BED of {spread(rest)}; the {len(clips)} held-out "
+              f"couples {spread([per.get(c) for c in clips])}.")
     w("- **IPR** (↓): share of frames in which the two dancers' capsule bodies intersect (our "
       "definition: ReactDance's code is unreleased). Real salsa holds hands and dances close, "
       "and capsules are coarse, so the real row is not 0; the target allows 2 points above it. "

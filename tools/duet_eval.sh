@@ -220,6 +220,9 @@ eval_set() { # pred_dir window out.json
         --json "$3" > /dev/null
 }
 eval_set "$OUT/gt" "$REAL_WINDOW" "$OUT/eval/real/eval.json"
+# Every real couple's BED, for the report's sense of scale.
+"$BIN" -q eval --pred "$OUT/gt_all" --leader "$OUT/gt_leader_all" --fps 30 --metrics bed \
+    --json "$OUT/eval/real_all_bed.json" > /dev/null
 for cfg in $RUN; do
     for seed in $SEEDS; do
         d=$OUT/gen/$cfg/seed$seed
