@@ -133,6 +133,16 @@ fn per_clip_nulls_for_frozen_clip_with_warning() {
         .find(|c| c["file"].as_str().unwrap().contains("gen05_R1_frozen"))
         .unwrap();
     assert!(frozen["bas"].is_null());
+    // The beat counts behind BAS: a frozen clip has no motion beats, but its music has beats.
+    assert_eq!(frozen["motion_beats"].as_u64(), Some(0));
+    assert!(frozen["music_beats"].as_u64().unwrap() > 0);
+    for c in clips.iter().filter(|c| c["bas"].is_number()) {
+        assert!(c["motion_beats"].as_u64().unwrap() > 0, "{c}");
+        assert_eq!(
+            c["music_beats"], frozen["music_beats"],
+            "same length, same beats: {c}"
+        );
+    }
     // A frozen clip is frozen all the time.
     assert_eq!(frozen["freeze"].as_f64(), Some(1.0));
     // The set mean excludes the null: mean of the 7 defined clip scores.

@@ -337,6 +337,12 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
                 );
             }
             row.insert(m.into(), v.map_or(Value::Null, num));
+            if m == "bas"
+                && let Some((motion, music_in_clip)) = solo::clip_beat_counts(clip, music, variant)?
+            {
+                row.insert("motion_beats".into(), json!(motion));
+                row.insert("music_beats".into(), json!(music_in_clip));
+            }
             columns.entry(m).or_default().push(v);
         }
         per_clip.push(Value::Object(row));

@@ -144,6 +144,25 @@ pub fn clip_bas(c: &Clip, music: &[usize], variant: Variant) -> Result<Option<f6
     })
 }
 
+/// Beats the BAS of a one-dancer clip compares: `(motion beats, music beats inside the clip)`.
+/// They say why a score is low: too few motion beats, or beats in the wrong place. `None` for
+/// a scene (one count per dancer would not fit a column).
+pub fn clip_beat_counts(
+    c: &Clip,
+    music: &[usize],
+    variant: Variant,
+) -> Result<Option<(usize, usize)>> {
+    let [d] = c.dancers.as_slice() else {
+        return Ok(None);
+    };
+    let motion = bas::try_motion_beats(&d.joints, variant)
+        .with_context(|| format!("{}", c.path.display()))?;
+    Ok(Some((
+        motion.len(),
+        bas::clip_music_beats(music, d.frames, variant).len(),
+    )))
+}
+
 /// Music-beat frame indices from `--beats` (`.npy` of indices, or a 35-dim feature file whose
 /// last column is the beat flag) or `--music` (computed at the clips' frame rate).
 pub fn music_beats(args: &EvalArgs, clips: &[Clip]) -> Result<Vec<usize>> {
