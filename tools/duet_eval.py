@@ -325,6 +325,22 @@ def cmd_report(args):
     rows = [("real followers (held-out, reference)", {k: (v, None) for k, v in real.items()})]
     for name, label, _ in run:
         rows.append((label_of(name, label), {k: stats(v)[:2] for k, v in data[name].items()}))
+    for b_out, b_label in zip(args.baseline, args.baseline_label):
+        # An earlier run's full system (another model) on the same clips: its eval JSON as it
+        # was written, boundary jerk at its BLC grid (eval's value).
+        b = {}
+        b_seeds = []
+        for s in seeds:
+            ej = opt_load(os.path.join(b_out, "eval", "full", f"seed{s}", "eval.json"))
+            if ej is None:
+                continue
+            b_seeds.append(s)
+            for k in METRICS:
+                b.setdefault(k, []).append(ej.get(k))
+        if not b_seeds:
+            sys.exit(f"--baseline {b_out}: no eval/full/seed*/eval.json for seeds {seeds}")
+        rows.append((f"before: {b_label} (`{b_out}`, seeds {' '.join(b_seeds)})",
+                     {k: stats(v)[:2] for k, v in b.items()}))
     for label, vals in rows:
         cells = [fmt(*vals.get(k, (None, None)), d, sc) for k, _, d, sc in cols]
         w(f"| {label} | " + " | ".join(cells) + " |")
@@ -556,6 +572,9 @@ def main():
     p.add_argument("--configs", default=" ".join(c[0] for c in CONFIGS))
     p.add_argument("--dry-run", action="store_true")
     p.add_argument("--report", required=True)
+    p.add_argument("--baseline", action="append", default=[],
+                   help="an earlier run's OUT: its full system becomes a 'before' row")
+    p.add_argument("--baseline-label", action="append", default=[])
     p.set_defaults(func=cmd_report)
     a = ap.parse_args()
     a.func(a)

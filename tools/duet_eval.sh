@@ -29,6 +29,8 @@
 #   REPORT=docs/duet-eval.md
 #   PYTHON=python3 (3.11+, standard library only)
 #   SEED_NOTE="..." a sentence added to the report (e.g. why fewer seeds were used)
+#   BASELINE=target/duet-eval-old  an earlier run's OUT (another model, same clips and seeds):
+#                        its full system is added as a "before" row; BASELINE_LABEL names it
 #   FRESH=1              regenerate everything (otherwise outputs of the same model files and
 #                        flags are reused)
 #
@@ -273,5 +275,8 @@ $HELP meta --out "$OUT/meta.json" \
     "seed_note=${SEED_NOTE:-}"
 RFLAGS=()
 [ "$DRY" = 1 ] && RFLAGS+=(--dry-run)
+if [ -n "${BASELINE:-}" ]; then
+    RFLAGS+=(--baseline "$(rel "$BASELINE")" --baseline-label "${BASELINE_LABEL:-the earlier model}")
+fi
 $HELP report --out "$OUT" --seeds "$SEEDS" --configs "$CONFIGS" "${RFLAGS[@]}" --report "$REPORT"
 log "done in $((WALL / 60)) min $((WALL % 60)) s"
