@@ -258,6 +258,9 @@ for v in STEPS CONFIGS SEEDS MODEL_NO_PM MODEL_M64 MODEL; do
     case $v in MODEL*) [ "$(realpath -m "$val")" = "$(realpath -m "$default")" ] && val=$default; val_show=$(rel "$val") ;; *) val_show=$val ;; esac
     [ "$val" != "$default" ] && CMD="$v=\"$val_show\" $CMD"
 done
+if [ -n "${BASELINE:-}" ]; then
+    CMD="BASELINE=\"$(rel "$BASELINE")\" BASELINE_LABEL=\"${BASELINE_LABEL:-the earlier model}\" $CMD"
+fi
 DIRTY=false
 [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ] && DIRTY=true
 $HELP meta --out "$OUT/meta.json" \
