@@ -175,7 +175,7 @@ impl SoloModel {
         let wload_err = |path: PathBuf| {
             move |e: weights::WeightsError| BundleError::Invalid {
                 path: path.clone(),
-                reason: e.to_string(),
+                reason: e.reason(),
             }
         };
         let need = |name: &str| -> Result<PathBuf, BundleError> {

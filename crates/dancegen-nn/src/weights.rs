@@ -32,21 +32,67 @@ pub enum Storage {
 }
 
 /// A checkpoint that cannot be loaded or saved.
-#[derive(Debug, thiserror::Error)]
+/// Shown as `path: reason`.
+#[derive(Debug)]
 pub enum WeightsError {
-    #[error("{path}: {reason}")]
-    Read { path: PathBuf, reason: String },
-    #[error("{path}: missing tensors the model needs: {}", .tensors.join(", "))]
-    Missing { path: PathBuf, tensors: Vec<String> },
-    #[error("{path}: tensors that do not fit the model: {}", .problems.join("; "))]
+    Read {
+        path: PathBuf,
+        reason: String,
+    },
+    Missing {
+        path: PathBuf,
+        tensors: Vec<String>,
+    },
     Mismatch {
         path: PathBuf,
         problems: Vec<String>,
     },
-    #[error("{path}: tensors the model does not have: {}", .tensors.join(", "))]
-    Unused { path: PathBuf, tensors: Vec<String> },
-    #[error("{path}: {reason}")]
-    Write { path: PathBuf, reason: String },
+    Unused {
+        path: PathBuf,
+        tensors: Vec<String>,
+    },
+    Write {
+        path: PathBuf,
+        reason: String,
+    },
+}
+
+impl std::fmt::Display for WeightsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.path().display(), self.reason())
+    }
+}
+
+impl std::error::Error for WeightsError {}
+
+impl WeightsError {
+    /// The checkpoint file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            Self::Read { path, .. }
+            | Self::Missing { path, .. }
+            | Self::Mismatch { path, .. }
+            | Self::Unused { path, .. }
+            | Self::Write { path, .. } => path,
+        }
+    }
+
+    /// What went wrong, without the file name: for callers whose own error already names the
+    /// file, so a message does not repeat the path.
+    pub fn reason(&self) -> String {
+        match self {
+            Self::Read { reason, .. } | Self::Write { reason, .. } => reason.clone(),
+            Self::Missing { tensors, .. } => {
+                format!("missing tensors the model needs: {}", tensors.join(", "))
+            }
+            Self::Mismatch { problems, .. } => {
+                format!("tensors that do not fit the model: {}", problems.join("; "))
+            }
+            Self::Unused { tensors, .. } => {
+                format!("tensors the model does not have: {}", tensors.join(", "))
+            }
+        }
+    }
 }
 
 /// Loads `path` into `model`. Every missing, misshapen or unexpected tensor is an error that
@@ -78,8 +124,13 @@ pub fn load<M: Module + ModuleSnapshot>(
     Ok(model)
 }
 
+/// Tensor names are sorted, so a message is the same from run to run.
 fn check(r: &ApplyResult, path: &Path) -> Result<(), WeightsError> {
     let path = path.to_path_buf();
+    let sorted = |mut v: Vec<String>| {
+        v.sort();
+        v
+    };
     if !r.errors.is_empty() {
         return Err(WeightsError::Mismatch {
             path,
@@ -89,13 +140,13 @@ fn check(r: &ApplyResult, path: &Path) -> Result<(), WeightsError> {
     if !r.missing.is_empty() {
         return Err(WeightsError::Missing {
             path,
-            tensors: r.missing.iter().map(|(p, _)| p.clone()).collect(),
+            tensors: sorted(r.missing.iter().map(|(p, _)| p.clone()).collect()),
         });
     }
     if !r.unused.is_empty() {
         return Err(WeightsError::Unused {
             path,
-            tensors: r.unused.clone(),
+            tensors: sorted(r.unused.clone()),
         });
     }
     Ok(())

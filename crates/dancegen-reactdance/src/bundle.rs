@@ -108,7 +108,7 @@ impl DuetModel {
         };
         let hp = need(files::HFSQ)?;
         let autoencoder = weights::load(config.autoencoder.init(device), &hp, Layout::Burn)
-            .map_err(|e| invalid(&hp, e))?;
+            .map_err(|e| invalid(&hp, e.reason()))?;
         let dp = need(files::DENOISER)?;
         let denoiser = weights::load(
             config.denoiser.init(
@@ -119,7 +119,7 @@ impl DuetModel {
             &dp,
             Layout::Burn,
         )
-        .map_err(|e| invalid(&dp, e))?;
+        .map_err(|e| invalid(&dp, e.reason()))?;
         let np = need(files::NORMALIZER)?;
         let norm = MeanStd::load(&np, PAIR_DIMS).map_err(|e| invalid(&np, e))?;
         Ok(Self {

@@ -91,3 +91,41 @@ fn a_bundle_without_the_key_is_the_papers_network() {
     let c: DenoiserConfig = toml::from_str("leader_film = true").unwrap();
     assert!(c.leader_film);
 }
+
+/// A bundle whose `model.toml` disagrees with its weights about the key does not load, and
+/// the error names the weights file once and the tensors that do not fit.
+#[test]
+fn weights_trained_with_the_film_do_not_load_into_the_papers_network() {
+    use dancegen_reactdance::bundle::DuetModel;
+    let shipped =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/reactdance-small");
+    let dir = tempfile::tempdir().unwrap();
+    for f in [
+        "hfsq.safetensors",
+        "denoiser.safetensors",
+        "normalizer.json",
+    ] {
+        std::fs::copy(shipped.join(f), dir.path().join(f)).unwrap();
+    }
+    let toml = std::fs::read_to_string(shipped.join("model.toml")).unwrap();
+    assert!(
+        toml.contains("leader_film = true"),
+        "the shipped model uses the key"
+    );
+    let paper = toml.replace("leader_film = true", "leader_film = false");
+    std::fs::write(dir.path().join("model.toml"), paper).unwrap();
+    let Err(e) = DuetModel::load(dir.path(), &device::inference()) else {
+        panic!("weights with the FiLM loaded into the paper's network");
+    };
+    let msg = e.to_string();
+    let file = dir
+        .path()
+        .join("denoiser.safetensors")
+        .display()
+        .to_string();
+    assert_eq!(msg.matches(&file).count(), 1, "{msg}");
+    assert!(
+        msg.contains("tensors the model does not have: leader_film.bias, leader_film.weight"),
+        "{msg}"
+    );
+}

@@ -132,13 +132,13 @@ impl HolisticModel {
         };
         let vp = need(files::VQ)?;
         let vq = weights::load(config.vq.autoencoder().init(device), &vp, Layout::Burn)
-            .map_err(|e| invalid(&vp, e))?;
+            .map_err(|e| invalid(&vp, e.reason()))?;
         let mp = need(files::MMR)?;
         let mmr = weights::load(config.mmr.retrieval().init(device), &mp, Layout::Burn)
-            .map_err(|e| invalid(&mp, e))?;
+            .map_err(|e| invalid(&mp, e.reason()))?;
         let gp = need(files::GENERATOR)?;
         let generator = weights::load(config.init_generator(device), &gp, Layout::Burn)
-            .map_err(|e| invalid(&gp, e))?;
+            .map_err(|e| invalid(&gp, e.reason()))?;
         let np = need(files::NORMALIZER)?;
         let norm = MeanStd::load(&np, TOTAL_DIMS).map_err(|e| invalid(&np, e))?;
         Ok(Self {

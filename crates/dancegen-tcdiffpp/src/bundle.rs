@@ -97,7 +97,7 @@ impl GroupModel {
             .model
             .denoiser
             .init(&[0.0; DIMS], &[1.0; DIMS], device);
-        let net = weights::load(init, &dp, Layout::Burn).map_err(|e| invalid(&dp, e))?;
+        let net = weights::load(init, &dp, Layout::Burn).map_err(|e| invalid(&dp, e.reason()))?;
         Ok(Self {
             dir: dir.to_path_buf(),
             config,

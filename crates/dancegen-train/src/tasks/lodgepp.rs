@@ -408,25 +408,23 @@ pub fn assemble_bundle(
     // draws, so a seed gives another dance than the F32 weights would; docs/solo-eval.md
     // measures the shipped (F16) bundle.
     let dev = device::inference();
-    let wrap = |run: &Path| {
-        let p = run.join(files::WEIGHTS);
-        move |e: weights::WeightsError| config_error(&p, e.to_string())
-    };
-    let half = |run: &Path, to: &str, save: &dyn Fn(&Path) -> Result<(), weights::WeightsError>| {
-        save(&out.join(to)).map_err(wrap(run))
+    // The error names the file it is about (a run's weights or the bundle file being written).
+    let wrap = |e: weights::WeightsError| config_error(e.path(), e.reason());
+    let half = |to: &str, save: &dyn Fn(&Path) -> Result<(), weights::WeightsError>| {
+        save(&out.join(to)).map_err(wrap)
     };
     let vq_model = weights::load(
         vq_task.init(&dev),
         &vqvae_run.join(files::WEIGHTS),
         Layout::Burn,
     )
-    .map_err(wrap(vqvae_run))?;
+    .map_err(wrap)?;
     let gpt_model = weights::load(
         config.gpt.gpt.init(codes, config.genres.len(), &dev),
         &gpt_run.join(files::WEIGHTS),
         Layout::Burn,
     )
-    .map_err(wrap(gpt_run))?;
+    .map_err(wrap)?;
     let Normalizer::MeanStd { mean, std } = &normalizer else {
         return Err(config_error(
             pddm_run,
@@ -438,16 +436,16 @@ pub fn assemble_bundle(
         &pddm_run.join(files::WEIGHTS),
         Layout::Burn,
     )
-    .map_err(wrap(pddm_run))?;
+    .map_err(wrap)?;
     pddm_model.discriminator = None;
     let f16 = weights::Storage::F16;
-    half(vqvae_run, bundle::files::VQVAE, &|p| {
+    half(bundle::files::VQVAE, &|p| {
         weights::save_as(&vq_model, p, Layout::Burn, &[], f16)
     })?;
-    half(gpt_run, bundle::files::GPT, &|p| {
+    half(bundle::files::GPT, &|p| {
         weights::save_as(&gpt_model, p, Layout::Burn, &[], f16)
     })?;
-    half(pddm_run, bundle::files::PDDM, &|p| {
+    half(bundle::files::PDDM, &|p| {
         weights::save_as(&pddm_model, p, Layout::Burn, &[], f16)
     })?;
     copy(

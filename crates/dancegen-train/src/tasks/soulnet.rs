@@ -218,7 +218,7 @@ where
     let table: T =
         super::bundle_files::finished_run_config(run, kind).map_err(|e| e.to_string())?;
     let model = weights::load(init(&table), &run.join(files::WEIGHTS), Layout::Burn)
-        .map_err(|e| format!("{}: {e}", run.join(files::WEIGHTS).display()))?;
+        .map_err(|e| e.to_string())?;
     Ok((table, model))
 }
 
@@ -405,7 +405,7 @@ pub fn assemble_holistic_bundle(
         &generator_run.join(files::WEIGHTS),
         Layout::Burn,
     )
-    .map_err(|e| err(generator_run, e.to_string()))?;
+    .map_err(|e| err(e.path(), e.reason()))?;
     // Every network saw the data through one normaliser (the same data set gives the same
     // statistics); a run on other data would silently shift the inputs.
     let norm = |run: &Path| std::fs::read(run.join(files::NORMALIZER)).ok();

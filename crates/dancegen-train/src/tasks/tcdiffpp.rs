@@ -171,11 +171,11 @@ pub fn assemble_group_bundle(
         &run.join(files::WEIGHTS),
         Layout::Burn,
     )
-    .map_err(|e| err(run, e.to_string()))?;
+    .map_err(|e| err(e.path(), e.reason()))?;
     std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
     let dp = out.join(bundle_files::DENOISER);
     weights::save_as(&net, &dp, Layout::Burn, &[], weights::Storage::F16)
-        .map_err(|e| err(&dp, e.to_string()))?;
+        .map_err(|e| err(&dp, e.reason()))?;
     super::bundle_files::copy_normalizer(run, &out.join(bundle_files::NORMALIZER))?;
     let bundle = BundleConfig {
         kind: BUNDLE_KIND.into(),
