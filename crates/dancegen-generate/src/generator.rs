@@ -116,6 +116,7 @@ impl Generator {
         {
             return Ok(m);
         }
+        check_kind::<S>(dir)?;
         // Loaded outside the lock: another job may load another model meanwhile (a second
         // load of the same one only costs time).
         let m = Arc::new(S::load(dir, &self.device)?);
@@ -219,4 +220,34 @@ impl Generator {
             written,
         })
     }
+}
+
+/// A model of another system (its `model.toml` `kind`) is refused with the `--system` that
+/// runs it, instead of the system's own loader reporting the other format's fields as unknown.
+/// A folder without a readable `kind` goes on to the loader, whose error names the problem.
+fn check_kind<S: DanceSystem>(dir: &Path) -> Result<(), GenerateError> {
+    let Some(kind) = crate::models::model_kind(dir) else {
+        return Ok(());
+    };
+    if kind == S::MODEL_KIND {
+        return Ok(());
+    }
+    Err(GenerateError::Invalid(
+        match crate::systems::by_model_kind(&kind) {
+            Some(other) => format!(
+                "{}: a {} model ({}, kind {kind:?}), not a {} one; run it with --system {}",
+                dir.display(),
+                other.name,
+                other.method,
+                S::NAME,
+                other.name
+            ),
+            None => format!(
+                "{}: kind {kind:?} is not a model this version can run (a {} model has kind {:?})",
+                dir.display(),
+                S::NAME,
+                S::MODEL_KIND
+            ),
+        },
+    ))
 }

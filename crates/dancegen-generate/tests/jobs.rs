@@ -270,6 +270,27 @@ fn a_missing_model_names_every_place_looked_in_and_writes_nothing() {
     assert!(!out.exists());
 }
 
+/// Asking the solo system to run the shipped duet model names the `--system` that runs it.
+#[test]
+fn a_model_of_another_system_names_the_system_that_runs_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.npy");
+    let mut req = solo(std::slice::from_ref(&out), 0.0, 3.0);
+    let duet = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/reactdance-small");
+    req.model = Some(duet.clone());
+    let e = generator()
+        .run(&req, &|_| {}, &CancelToken::new())
+        .unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, GenerateError::Invalid(_)), "{msg}");
+    assert!(msg.contains(&duet.display().to_string()), "{msg}");
+    assert!(
+        msg.contains("a duet model") && msg.contains("--system duet"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn bad_outputs_fail_before_any_work() {
     let g = generator();
