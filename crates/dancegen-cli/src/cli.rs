@@ -145,6 +145,8 @@ pub struct GenerateArgs {
     #[arg(long, value_name = "DIR")]
     pub model: Option<PathBuf>,
     /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
+    /// It needs joint rotations: a solo dance for it is a `generate -o leader.npz` (or .bvh),
+    /// not the joint positions of `.npy`.
     /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
     /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
     /// which hold the follower.

@@ -291,6 +291,25 @@ fn a_model_of_another_system_names_the_system_that_runs_it() {
     assert!(!out.exists());
 }
 
+/// A leader given as joint positions (what `generate -o x.npy` writes) is refused with the
+/// formats that would do, naming the file once.
+#[test]
+fn a_leader_without_rotations_is_refused_with_the_formats_that_have_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("leader.npy");
+    let frames = 30;
+    dancegen_io::write_npy_f32(&p, &[frames, 24, 3], &vec![0.1; frames * 24 * 3]).unwrap();
+    let Err(e) = load_leader(&p) else {
+        panic!("joint positions were taken as a leader");
+    };
+    let msg = e.to_string();
+    assert_eq!(msg.matches(&p.display().to_string()).count(), 1, "{msg}");
+    assert!(
+        msg.contains("no rotations") && msg.contains(".npz"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn bad_outputs_fail_before_any_work() {
     let g = generator();

@@ -219,7 +219,8 @@ pub fn convert_motion(
         (LoadedMotion::Joints { .. }, true) => {
             return Err(err(
                 path,
-                "joint positions cannot be retargeted (no rotations)",
+                "joint positions only, no rotations to retarget (SMPL .npz, .bvh, .fbx and .glb \
+                 have them)",
             ));
         }
         (m, _) => m,

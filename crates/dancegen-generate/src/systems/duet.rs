@@ -89,9 +89,10 @@ pub fn load_leader(path: &Path) -> Result<SmplMotion, GenerateError> {
         fps: Some(FPS as f32),
         ..Default::default()
     };
+    // The conversion's error already names the file.
     let m = match convert_motion(path, loaded, &opts).map_err(|e| {
-        invalid(format!(
-            "cannot use it as the leader (a humanoid skeleton retargets to SMPL 24): {e}"
+        GenerateError::Invalid(format!(
+            "{e} (the leader must be one humanoid dancer that retargets to SMPL 24)"
         ))
     })? {
         LoadedMotion::Smpl(m) => m,
