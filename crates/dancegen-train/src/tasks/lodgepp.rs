@@ -408,23 +408,19 @@ pub fn assemble_bundle(
     // draws, so a seed gives another dance than the F32 weights would; docs/solo-eval.md
     // measures the shipped (F16) bundle.
     let dev = device::inference();
-    // The error names the file it is about (a run's weights or the bundle file being written).
-    let wrap = |e: weights::WeightsError| config_error(e.path(), e.reason());
-    let half = |to: &str, save: &dyn Fn(&Path) -> Result<(), weights::WeightsError>| {
-        save(&out.join(to)).map_err(wrap)
-    };
+    // A weights error names the file it is about (a run's weights or the bundle file written).
+    let half =
+        |to: &str, save: &dyn Fn(&Path) -> Result<(), weights::WeightsError>| save(&out.join(to));
     let vq_model = weights::load(
         vq_task.init(&dev),
         &vqvae_run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(wrap)?;
+    )?;
     let gpt_model = weights::load(
         config.gpt.gpt.init(codes, config.genres.len(), &dev),
         &gpt_run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(wrap)?;
+    )?;
     let Normalizer::MeanStd { mean, std } = &normalizer else {
         return Err(config_error(
             pddm_run,
@@ -435,8 +431,7 @@ pub fn assemble_bundle(
         run_pddm.init(mean, std, &dev),
         &pddm_run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(wrap)?;
+    )?;
     pddm_model.discriminator = None;
     let f16 = weights::Storage::F16;
     half(bundle::files::VQVAE, &|p| {

@@ -264,14 +264,13 @@ pub fn assemble_duet_bundle(
             .init(ae_cfg.latent_dim(), ae_cfg.frames_per_token(), &dev),
         &ldm_run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(|e| err(e.path(), e.reason()))?;
+    )?;
     std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
     let f16 = weights::Storage::F16;
     let hp = out.join(bundle_files::HFSQ);
-    weights::save_as(&ae, &hp, Layout::Burn, &[], f16).map_err(|e| err(&hp, e.reason()))?;
+    weights::save_as(&ae, &hp, Layout::Burn, &[], f16)?;
     let dp = out.join(bundle_files::DENOISER);
-    weights::save_as(&net, &dp, Layout::Burn, &[], f16).map_err(|e| err(&dp, e.reason()))?;
+    weights::save_as(&net, &dp, Layout::Burn, &[], f16)?;
     super::bundle_files::copy_normalizer(ldm_run, &out.join(bundle_files::NORMALIZER))?;
     let run = crate::trainer::run_config(ldm_run)?;
     let config = BundleConfig {

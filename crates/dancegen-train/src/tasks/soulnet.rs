@@ -404,8 +404,7 @@ pub fn assemble_holistic_bundle(
         config.init_generator(&dev),
         &generator_run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(|e| err(e.path(), e.reason()))?;
+    )?;
     // Every network saw the data through one normaliser (the same data set gives the same
     // statistics); a run on other data would silently shift the inputs.
     let norm = |run: &Path| std::fs::read(run.join(files::NORMALIZER)).ok();

@@ -156,10 +156,6 @@ pub fn assemble_group_bundle(
 
     use crate::files;
 
-    let err = |p: &std::path::Path, reason: String| crate::TrainError::Config {
-        path: p.to_path_buf(),
-        reason,
-    };
     let mut config: GroupModelConfig = super::bundle_files::finished_run_config(run, KIND)?;
     // Sampling is not trained: the bundle gets this version's defaults (as the duet bundle
     // does), so a rebuilt bundle matches the shipped one.
@@ -170,12 +166,10 @@ pub fn assemble_group_bundle(
         config.denoiser.init(&vec![0.0; d], &vec![1.0; d], &dev),
         &run.join(files::WEIGHTS),
         Layout::Burn,
-    )
-    .map_err(|e| err(e.path(), e.reason()))?;
+    )?;
     std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
     let dp = out.join(bundle_files::DENOISER);
-    weights::save_as(&net, &dp, Layout::Burn, &[], weights::Storage::F16)
-        .map_err(|e| err(&dp, e.reason()))?;
+    weights::save_as(&net, &dp, Layout::Burn, &[], weights::Storage::F16)?;
     super::bundle_files::copy_normalizer(run, &out.join(bundle_files::NORMALIZER))?;
     let bundle = BundleConfig {
         kind: BUNDLE_KIND.into(),
