@@ -16,7 +16,8 @@
 //!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
 //!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation;
 //!   [`genre`]: a nearest-centroid genre classifier on kinetic features (our genre-control check);
-//!   [`posture`]: the share of upside-down frames (our check).
+//!   [`posture`]: the share of upside-down frames (our check); [`physical`]: floor contact, foot
+//!   sliding, jerk, spikes, crossed shins and kinematic tempo (our plausibility figures).
 //!
 //! Inputs are global joint positions, SMPL 24-joint order, **Y-up**, metres, flattened C order
 //! `(T, 24, 3)`: value `joints[(t * 24 + j) * 3 + c]`. No files, no framework: plain slices in,
@@ -86,6 +87,7 @@ pub mod mmr;
 pub mod mpjpe;
 pub mod penetration;
 pub mod pfc;
+pub mod physical;
 pub mod posture;
 pub mod protocol;
 
@@ -114,6 +116,9 @@ pub enum FeatureError {
         min: usize,
         frames: usize,
     },
+    /// A frame rate that is not finite and positive.
+    #[error("frame rate {fps} is not a positive number")]
+    BadRate { fps: f64 },
     /// A `.npy` file that is not a `(T, 24, 3)` array.
     #[error("{path}: expected a (T, 24, 3) array, got shape {shape:?}")]
     BadShape { path: String, shape: Vec<usize> },

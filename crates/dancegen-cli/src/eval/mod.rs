@@ -34,6 +34,7 @@ mod duet;
 mod genre;
 mod group;
 mod input;
+mod physical;
 mod report;
 mod solo;
 
@@ -49,7 +50,7 @@ use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
 /// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 24] = [
+const METRICS: [&str; 37] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -74,10 +75,23 @@ const METRICS: [&str; 24] = [
     "inverted",
     "boundary_jerk",
     "genre",
+    "floor_median",
+    "floor_p05",
+    "floor_p95",
+    "float",
+    "foot_slide",
+    "jerk",
+    "jerk_p99",
+    "max_step",
+    "spikes",
+    "leg_cross",
+    "joint_speed",
+    "pelvis_speed",
+    "step_rate",
 ];
 
 /// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 16] = [
+const PER_CLIP: [&str; 29] = [
     "bas",
     "pfc",
     "fsr",
@@ -94,6 +108,25 @@ const PER_CLIP: [&str; 16] = [
     "bed",
     "ipr",
     "contact_range",
+    "floor_median",
+    "floor_p05",
+    "floor_p95",
+    "float",
+    "foot_slide",
+    "jerk",
+    "jerk_p99",
+    "max_step",
+    "spikes",
+    "leg_cross",
+    "joint_speed",
+    "pelvis_speed",
+    "step_rate",
+];
+
+/// Names that stand for several metrics in `--metrics`.
+const GROUPS: [(&str, &str); 2] = [
+    ("physical", "the physical-plausibility figures"),
+    ("all", "every metric the inputs allow (the default)"),
 ];
 
 /// What the inputs offer, to choose the default metrics and reject impossible requests.
@@ -152,20 +185,38 @@ impl Offer {
     }
 }
 
-fn parse_metric_list(list: &str) -> Result<Vec<String>> {
+/// `--metrics`: the names asked for (`physical` expanded), or `None` when `all` is among them.
+fn parse_metric_list(list: &str) -> Result<Option<Vec<String>>> {
     let mut out: Vec<String> = Vec::new();
-    for m in list.split(',').map(str::trim).filter(|m| !m.is_empty()) {
-        if !METRICS.contains(&m) {
-            bail!("unknown metric {m}; known: {}", METRICS.join(","));
-        }
+    let mut all = false;
+    let push = |m: &str, out: &mut Vec<String>| {
         if !out.iter().any(|o| o == m) {
             out.push(m.to_string());
         }
+    };
+    for m in list.split(',').map(str::trim).filter(|m| !m.is_empty()) {
+        match m {
+            "all" => all = true,
+            "physical" => {
+                for k in dancegen_metrics::physical::KEYS {
+                    push(k, &mut out);
+                }
+            }
+            _ if METRICS.contains(&m) => push(m, &mut out),
+            _ => bail!(
+                "unknown metric {m}; known: {}, or a group: {}",
+                METRICS.join(","),
+                GROUPS.map(|(g, what)| format!("{g} ({what})")).join(", ")
+            ),
+        }
+    }
+    if all {
+        return Ok(None);
     }
     if out.is_empty() {
         bail!("--metrics is empty");
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
 pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
@@ -182,7 +233,12 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         BasVariantArg::Gcd => Variant::Gcd,
     };
     // Unknown names fail before any file is read.
-    let requested = args.metrics.as_deref().map(parse_metric_list).transpose()?;
+    let requested = args
+        .metrics
+        .as_deref()
+        .map(parse_metric_list)
+        .transpose()?
+        .flatten();
     if !args.gt_leader.is_empty() && args.gt.is_empty() {
         bail!("--gt-leader needs --gt (the GT followers)");
     }
@@ -191,7 +247,8 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         if inputs.is_empty() {
             return Ok(Vec::new());
         }
-        input::load_set(inputs, &protocol, args.fps).with_context(|| flag.to_string())
+        input::load_set(inputs, &protocol, args.fps, args.source_fps)
+            .with_context(|| flag.to_string())
     };
     let pred = load(&args.pred, "--pred")?;
     let gt = load(&args.gt, "--gt")?;
@@ -285,7 +342,13 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
     let mut per_clip = Vec::new();
     let mut columns: BTreeMap<&str, Vec<Option<f64>>> = BTreeMap::new();
     let mut fsd_all = Vec::new();
+    let want_physical = metrics.iter().any(|m| physical::is_physical(m));
     for (i, (clip, pair)) in pred.iter().zip(&pred_pairs).enumerate() {
+        let figures = if want_physical {
+            physical::clip_figures(clip)?
+        } else {
+            Vec::new()
+        };
         let mut row = serde_json::Map::new();
         row.insert("file".into(), json!(clip.path.display().to_string()));
         row.insert("frames".into(), json!(clip.frames()));
@@ -324,6 +387,7 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
                     Some(p) => (duet::clip_metric(m, clip, p)?, false),
                     None => (None, true),
                 },
+                _ if physical::is_physical(m) => (physical::value(&figures, m), false),
                 other => (
                     solo::over_dancers(clip, |d| solo::clip_metric(other, d, args.window as usize))
                         .with_context(|| format!("{}: {other}", clip.path.display()))?,
@@ -362,6 +426,8 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         };
         let value = if m == "fsd" {
             dancegen_metrics::foot_skating_duration::pooled_percent(&fsd_all)
+        } else if physical::is_physical(m) {
+            physical::combine(m, &vals)
         } else {
             mean(&vals).map(|v| v * scale)
         };
