@@ -152,6 +152,11 @@ pub struct GenerateArgs {
     /// which hold the follower.
     #[arg(long, value_name = "FILE")]
     pub leader: Option<PathBuf>,
+    /// Duet: the rate the leader was captured at, whatever its file's header says (the frames
+    /// stay the same, their times change), e.g. 60 for the CMU salsa BVHs whose headers say
+    /// 120. Needed for a file whose header has no rate.
+    #[arg(long, value_name = "FPS", requires = "leader", value_parser = parse_source_fps)]
+    pub leader_fps: Option<f64>,
     /// Duet: write the follower alone to every output.
     #[arg(long, requires = "leader")]
     pub follower_only: bool,
@@ -382,10 +387,18 @@ pub struct EvalArgs {
     /// Frame rate of .npy inputs (default: the protocol's).
     #[arg(long)]
     pub fps: Option<f64>,
+    /// Read every input (--pred, --gt, --leader, --gt-leader) as sampled at this rate,
+    /// whatever the files' headers say (the frames stay the same, their times change); for
+    /// .npy inputs, the same as --fps.
+    #[arg(long, value_name = "FPS", value_parser = parse_source_fps, conflicts_with = "fps")]
+    pub source_fps: Option<f64>,
     /// Comma-separated metrics (default: all that the inputs allow; duet metrics by default only
     /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,penetration,gmr,gmc,tif,
     /// collision,min_distance,fid_cd,div_cd,bed,ipr,contact_range,freeze,inverted,
-    /// boundary_jerk,genre.
+    /// boundary_jerk,genre, and the physical figures floor_median,floor_p05,floor_p95,float,
+    /// foot_slide,jerk,jerk_p99,max_step,spikes,leg_cross,joint_speed,pelvis_speed,step_rate
+    /// (world joints in metres, floor at y = 0). Groups: `physical` (those thirteen), `all`
+    /// (every metric the inputs allow, the default).
     #[arg(long)]
     pub metrics: Option<String>,
     /// Genre check: the data set manifest (`dancegen dataset build`'s manifest.json) giving the
@@ -445,6 +458,11 @@ pub struct ConvertArgs {
     /// Output frame rate (default: the input's).
     #[arg(long)]
     pub fps: Option<f32>,
+    /// Read the input as sampled at this rate, whatever its header says: the frames stay the
+    /// same, their times change (--fps still resamples the output). E.g. 60 for the CMU salsa
+    /// BVHs, whose headers say 120. Needed for a file whose header has no rate.
+    #[arg(long, value_name = "FPS", value_parser = parse_source_fps)]
+    pub source_fps: Option<f64>,
     /// Retarget to this skeleton first.
     #[arg(long, value_enum)]
     pub to: Option<TargetSkeleton>,
@@ -459,6 +477,15 @@ pub struct ConvertArgs {
     /// in every rig. Needs SMPL 24 motion (add --to smpl24 for a BVH).
     #[arg(long, default_value = "smpl", value_parser = parse_rig)]
     pub rig: Rig,
+}
+
+/// `--source-fps N` / `--leader-fps N`: a capture rate in (0, 1000].
+fn parse_source_fps(s: &str) -> Result<f64, String> {
+    let fps: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number of frames per second"))?;
+    dancegen_motion::formats::check_source_fps(fps)
 }
 
 /// `--rig NAME`, with the presets listed when the name is unknown.
@@ -481,6 +508,10 @@ pub struct RenderArgs {
     /// Output frame rate (default: the motion's; at most 15 for .gif unless given).
     #[arg(long)]
     pub fps: Option<f32>,
+    /// Read the motion files as sampled at this rate, whatever their headers say (the frames
+    /// stay the same, their times change), e.g. 60 for the CMU salsa BVHs.
+    #[arg(long, value_name = "FPS", value_parser = parse_source_fps)]
+    pub source_fps: Option<f64>,
     /// Image width in pixels.
     #[arg(long, default_value_t = 640)]
     pub width: u32,
@@ -624,6 +655,15 @@ pub struct DatasetBuildArgs {
     /// Motion or song file names (without extension) to keep out of training.
     #[arg(long = "hold-out", num_args = 1.., value_name = "STEM")]
     pub hold_out: Vec<String>,
+    /// The rate a --motion input was captured at, whatever its header says (repeatable):
+    /// INPUT=FPS, INPUT a --motion directory or file or a file name without extension (the
+    /// most specific entry wins), or FPS alone for every input; e.g.
+    /// `--source-fps ../shared/data/cmu-salsa=60`. Inputs without one are read at their
+    /// header's rate. Each take's rate, kinematic tempo and floor are printed and recorded in
+    /// the manifest (`takes`), and a take outside the tempo of real dance is warned about.
+    #[arg(long = "source-fps", value_name = "INPUT=FPS",
+          value_parser = dancegen_dataset::takes::SourceRates::parse_entry)]
+    pub source_fps: Vec<(Option<String>, f64)>,
     /// How motion and music are paired.
     #[arg(long, value_enum, default_value_t = PairingArg::Pseudo)]
     pub pairing: PairingArg,

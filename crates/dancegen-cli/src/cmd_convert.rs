@@ -4,7 +4,7 @@ use std::io::Write;
 
 use anyhow::Result;
 use dancegen_motion::formats::{
-    ConvertOptions, NpzStyle, convert_motion, load_motion_file, save_motion_file,
+    ConvertOptions, LoadOptions, NpzStyle, convert_motion, load_motion_file_with, save_motion_file,
 };
 
 use crate::cli::{ConvertArgs, NpzStyleArg, TargetSkeleton};
@@ -22,7 +22,11 @@ pub fn run(args: &ConvertArgs, quiet: bool) -> Result<()> {
         rig: args.rig,
     };
     let pb = spinner(&format!("converting {}", args.input.display()), quiet);
-    let loaded = load_motion_file(&args.input)?;
+    let read = LoadOptions {
+        source_fps: args.source_fps,
+        ..LoadOptions::default()
+    };
+    let loaded = load_motion_file_with(&args.input, &read)?;
     let converted = convert_motion(&args.input, loaded, &opts)?;
     save_motion_file(&args.output, &converted, &opts)?;
     pb.finish_and_clear();

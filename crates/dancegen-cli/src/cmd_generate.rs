@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
-use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader};
+use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader_at};
 use dancegen_generate::systems::group::{GroupOptions, LongSampler};
 use dancegen_generate::systems::holistic::HolisticOptions;
 
@@ -197,7 +197,7 @@ fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOpt
             bail!("--sampler {other:?} is a solo sampler; with --leader use blc or autoregressive")
         }
     };
-    let motion = load_leader(leader)?;
+    let motion = load_leader_at(leader, args.leader_fps)?;
     Ok(DuetOptions {
         sampler,
         guidance_coarse: args.guidance_coarse,

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use dancegen_motion::formats::load_motion_file;
+use dancegen_motion::formats::{LoadOptions, load_motion_file_with};
 use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -56,7 +56,11 @@ pub fn run(args: &RenderArgs, quiet: bool) -> Result<()> {
     let pb = spinner("loading motion", quiet);
     let mut tracks = Vec::new();
     for path in &args.motions {
-        let m = load_motion_file(path)?;
+        let read = LoadOptions {
+            source_fps: args.source_fps,
+            ..LoadOptions::default()
+        };
+        let m = load_motion_file_with(path, &read)?;
         tracks.extend(tracks_from_motion(path, &m)?);
     }
     let motion_fps = tracks.first().map_or(30.0, |t| t.fps);

@@ -115,11 +115,19 @@ pub struct Bvh {
 pub struct BvhReadOptions {
     /// Multiplies offsets, end-site offsets and position channels. Must be finite.
     pub scale: f64,
+    /// Seconds per frame to use instead of the header's `Frame Time`, for files whose header
+    /// is wrong (the CMU salsa conversions say 120 fps for a 60 fps capture). With it, the
+    /// header's value is not checked and the `Frame Time:` line may be missing. Must be finite
+    /// and positive.
+    pub frame_time: Option<f64>,
 }
 
 impl Default for BvhReadOptions {
     fn default() -> Self {
-        BvhReadOptions { scale: 1.0 }
+        BvhReadOptions {
+            scale: 1.0,
+            frame_time: None,
+        }
     }
 }
 
@@ -178,6 +186,8 @@ pub enum BvhErrorKind {
     MissingMotion,
     #[error("line {line}: invalid frame time {value} (must be finite and positive)")]
     BadFrameTime { line: usize, value: f64 },
+    #[error("line {line}: no `Frame Time:` line after the frame count")]
+    MissingFrameTime { line: usize },
     #[error("line {line}: expected {expected} values, found {found}")]
     WrongValueCount {
         line: usize,
@@ -244,6 +254,7 @@ fn clip(s: &str) -> String {
     format!("{}…", &s[..end])
 }
 
+#[derive(Clone)]
 struct Lexer<'a> {
     lines: std::str::Lines<'a>,
     line_no: usize,
@@ -330,6 +341,28 @@ impl<'a> Lexer<'a> {
     }
 }
 
+/// `Frame Time: <seconds>` up to the end of its line: `(line, value)`, the value unchecked.
+fn read_frame_time(lx: &mut Lexer<'_>) -> Result<(usize, f64), BvhErrorKind> {
+    let (l2, t2) = lx.expect_token("Frame Time:")?;
+    if !t2.eq_ignore_ascii_case("Frame") {
+        return Err(BvhErrorKind::Unexpected {
+            line: l2,
+            expected: "Frame Time:",
+            found: clip(t2),
+        });
+    }
+    lx.expect_label("Time", "Frame Time:")?;
+    let (tline, frame_time) = lx.expect_number("frame time")?;
+    if let Some(extra) = lx.rest_of_line().first() {
+        return Err(BvhErrorKind::Unexpected {
+            line: tline,
+            expected: "end of line after Frame Time",
+            found: clip(extra),
+        });
+    }
+    Ok((tline, frame_time))
+}
+
 fn parse_f64(line: usize, t: &str) -> Result<f64, BvhErrorKind> {
     match t.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
@@ -379,6 +412,13 @@ fn parse_inner(text: &str, opts: &BvhReadOptions) -> Result<Bvh, BvhErrorKind> {
     if !scale.is_finite() {
         return Err(BvhErrorKind::Invalid(format!(
             "scale must be finite, got {scale}"
+        )));
+    }
+    if let Some(ft) = opts.frame_time
+        && !(ft.is_finite() && ft > 0.0)
+    {
+        return Err(BvhErrorKind::Invalid(format!(
+            "the given frame time must be finite and positive, got {ft}"
         )));
     }
     let mut lx = Lexer::new(text.strip_prefix('\u{feff}').unwrap_or(text));
@@ -560,29 +600,27 @@ fn parse_inner(text: &str, opts: &BvhReadOptions) -> Result<Bvh, BvhErrorKind> {
         line: fline,
         token: clip(ftok),
     })?;
-    let (l2, t2) = lx.expect_token("Frame Time:")?;
-    if !t2.eq_ignore_ascii_case("Frame") {
-        return Err(BvhErrorKind::Unexpected {
-            line: l2,
-            expected: "Frame Time:",
-            found: clip(t2),
-        });
-    }
-    lx.expect_label("Time", "Frame Time:")?;
-    let (tline, frame_time) = lx.expect_number("frame time")?;
-    if !(frame_time > 0.0 || (frames == 0 && frame_time == 0.0)) {
-        return Err(BvhErrorKind::BadFrameTime {
-            line: tline,
-            value: frame_time,
-        });
-    }
-    if let Some(extra) = lx.rest_of_line().first() {
-        return Err(BvhErrorKind::Unexpected {
-            line: tline,
-            expected: "end of line after Frame Time",
-            found: clip(extra),
-        });
-    }
+    // The `Frame Time:` line; a file without one has its first motion value next.
+    let next = lx.clone().next_token();
+    let header_time = match next {
+        Some((line, t)) if !t.eq_ignore_ascii_case("Frame") && t.parse::<f64>().is_ok() => {
+            if opts.frame_time.is_none() && frames > 0 {
+                return Err(BvhErrorKind::MissingFrameTime { line });
+            }
+            None
+        }
+        _ => Some(read_frame_time(&mut lx)?),
+    };
+    let frame_time = match (opts.frame_time, header_time) {
+        (Some(given), _) => given,
+        (None, Some((line, value))) => {
+            if !(value > 0.0 || (frames == 0 && value == 0.0)) {
+                return Err(BvhErrorKind::BadFrameTime { line, value });
+            }
+            value
+        }
+        (None, None) => 0.0,
+    };
 
     let nch: usize = joints.iter().map(|j| j.channels.len()).sum();
     let pos_mask: Vec<bool> = joints

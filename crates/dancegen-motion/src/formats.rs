@@ -89,25 +89,120 @@ fn extension(path: &Path) -> String {
 /// Frame rate assumed for `.npy` inputs, which do not store one (FineDance is 30 fps).
 pub const NPY_DEFAULT_FPS: f32 = 30.0;
 
-/// Reads any supported motion file (see the module table).
+/// Largest source frame rate [`LoadOptions::source_fps`] accepts: no motion capture a dance
+/// comes from runs faster (optical systems record dance at 60-480 fps).
+pub const MAX_SOURCE_FPS: f64 = 1000.0;
+
+/// How [`load_motion_file_with`] reads a file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadOptions {
+    /// The rate the file was really sampled at, whatever its header says: the frames stay the
+    /// same, their times change (a BVH whose header says 120 fps for a 60 fps capture plays
+    /// at half speed with `Some(60.0)`). In `(0, MAX_SOURCE_FPS]`.
+    pub source_fps: Option<f64>,
+    /// The command-line flag that sets `source_fps`, named in the error of a file whose header
+    /// has no usable rate (`--source-fps`, `--leader-fps`).
+    pub rate_flag: &'static str,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            source_fps: None,
+            rate_flag: "--source-fps",
+        }
+    }
+}
+
+/// Checks a source frame rate given by the user: `Err` says what is wrong with it.
+pub fn check_source_fps(fps: f64) -> Result<f64, String> {
+    if fps.is_finite() && fps > 0.0 && fps <= MAX_SOURCE_FPS {
+        Ok(fps)
+    } else {
+        Err(format!(
+            "{fps} is not a frame rate: give the rate the motion was captured at, \
+             above 0 and at most {MAX_SOURCE_FPS} fps"
+        ))
+    }
+}
+
+/// Reads any supported motion file (see the module table) at the rate stored in it.
 pub fn load_motion_file(path: &Path) -> Result<LoadedMotion, FormatError> {
+    load_motion_file_with(path, &LoadOptions::default())
+}
+
+/// Reads any supported motion file, at [`LoadOptions::source_fps`] when it is given.
+pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMotion, FormatError> {
+    if let Some(fps) = opts.source_fps {
+        check_source_fps(fps).map_err(|e| err(path, format!("{}: {e}", opts.rate_flag)))?;
+    }
     if !path.exists() {
         return Err(err(path, "no such file"));
     }
-    match extension(path).as_str() {
-        "pkl" => load_pickle(path),
-        "bvh" => bvh::read_bvh(path, &BvhReadOptions::default())
-            .map(LoadedMotion::Bvh)
-            .map_err(|e| err(path, e)),
-        "npz" => crate::smpl_npz::read_smpl_npz(path, &SmplNpzOptions::default())
-            .map(|n| LoadedMotion::Smpl(n.motion))
-            .map_err(|e| err(path, e)),
-        "npy" => load_npy(path),
-        other => Err(err(
-            path,
-            format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz or .npy)"),
-        )),
+    let fps = opts.source_fps;
+    let mut loaded = match extension(path).as_str() {
+        "pkl" => load_pickle(path)?,
+        "bvh" => {
+            let read = BvhReadOptions {
+                frame_time: fps.map(|f| 1.0 / f),
+                ..BvhReadOptions::default()
+            };
+            let b = bvh::read_bvh(path, &read).map_err(|e| match e.kind {
+                bvh::BvhErrorKind::BadFrameTime { .. }
+                | bvh::BvhErrorKind::MissingFrameTime { .. } => err(
+                    path,
+                    format!(
+                        "{}; the file's frame rate is unknown: give the rate it was captured \
+                         at with {} N",
+                        e.kind, opts.rate_flag
+                    ),
+                ),
+                _ => err(path, e.kind),
+            })?;
+            LoadedMotion::Bvh(b)
+        }
+        "npz" => {
+            let read = SmplNpzOptions {
+                fps: fps.map(|f| f as f32),
+                ..SmplNpzOptions::default()
+            };
+            crate::smpl_npz::read_smpl_npz(path, &read)
+                .map(|n| LoadedMotion::Smpl(n.motion))
+                .map_err(|e| {
+                    let text = e.to_string();
+                    if text.contains("mocap_framerate") && fps.is_none() {
+                        err(
+                            path,
+                            format!(
+                                "{text}; the file's frame rate is unknown: give the rate it \
+                                 was captured at with {} N",
+                                opts.rate_flag
+                            ),
+                        )
+                    } else {
+                        err(path, text)
+                    }
+                })?
+        }
+        "npy" => load_npy(path)?,
+        other => {
+            return Err(err(
+                path,
+                format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz or .npy)"),
+            ));
+        }
+    };
+    if let Some(f) = fps {
+        let f = f as f32;
+        match &mut loaded {
+            LoadedMotion::Smpl(m) => m.fps = f,
+            LoadedMotion::Group(g) => g.iter_mut().for_each(|m| m.fps = f),
+            LoadedMotion::Joints { fps, .. } => *fps = f,
+            // Read with the given frame time above.
+            LoadedMotion::Bvh(_) => {}
+        }
     }
+    Ok(loaded)
 }
 
 fn load_pickle(path: &Path) -> Result<LoadedMotion, FormatError> {
@@ -212,8 +307,16 @@ pub fn convert_motion(
                 path.display(),
                 out.source.convention.name
             );
-            let motion =
+            let mut motion =
                 SmplMotion::new(out.fps as f32, out.poses, out.trans).map_err(|e| err(path, e))?;
+            // The source's floor is not SMPL's: the hips are placed on the source's hips and
+            // SMPL's legs are longer or shorter than the source's (the salsa takes' SMPL feet
+            // rest ≈ 10 cm up). Put the resting feet on y = 0, the crate's floor.
+            let lifted = motion.put_feet_on_floor().map_err(|e| err(path, e))?;
+            tracing::info!(
+                "{}: floor put at y = 0 (resting feet were at {lifted:+.3} m)",
+                path.display()
+            );
             LoadedMotion::Smpl(motion)
         }
         (LoadedMotion::Joints { .. }, true) => {

@@ -93,6 +93,9 @@ pub struct SmplNpzOptions {
     pub up: UpAxis,
     /// Rest pelvis `J0` in metres (Y-up model coordinates) linking `transl` to the pelvis.
     pub pelvis_rest: [f32; 3],
+    /// Frame rate to use instead of the file's rate member (or of its absence), for a file
+    /// whose stored rate is wrong or missing.
+    pub fps: Option<f32>,
 }
 
 impl Default for SmplNpzOptions {
@@ -100,6 +103,7 @@ impl Default for SmplNpzOptions {
         SmplNpzOptions {
             up: UpAxis::Z,
             pelvis_rest: AISTPP_PELVIS_REST,
+            fps: None,
         }
     }
 }
@@ -184,7 +188,11 @@ pub fn read_smpl_npz(path: &Path, opts: &SmplNpzOptions) -> Result<SmplNpz, Repr
         BODY_JOINTS * 3
     };
 
-    let fps = fps_of(&get, layout).map_err(bad)?;
+    let fps = match opts.fps {
+        Some(f) if f.is_finite() && f > 0.0 => f,
+        Some(f) => return Err(bad(format!("the given frame rate {f} is not positive"))),
+        None => fps_of(&get, layout).map_err(bad)?,
+    };
     let z = match layout {
         SmplNpzLayout::Amass => opts.up == UpAxis::Z,
         SmplNpzLayout::Edge => true,

@@ -150,7 +150,14 @@ fn write_file_and_scale() {
     write_bvh_file(&out, &a, &BvhWriteOptions::default()).unwrap();
     assert_eq!(read_bvh(&out, &opts()).unwrap(), a);
 
-    let s = read_bvh(&out, &BvhReadOptions { scale: 2.0 }).unwrap();
+    let s = read_bvh(
+        &out,
+        &BvhReadOptions {
+            scale: 2.0,
+            ..opts()
+        },
+    )
+    .unwrap();
     assert_eq!(s.joints[3].offset[1], a.joints[3].offset[1] * 2.0);
     assert_eq!(
         s.joints[5].end_site.unwrap()[0],
@@ -235,7 +242,14 @@ fn unusual_channels() {
     assert_eq!(b.position(0, 2), None);
 
     // Scale touches positions and offsets only.
-    let s = parse_bvh(ODD, &BvhReadOptions { scale: 10.0 }).unwrap();
+    let s = parse_bvh(
+        ODD,
+        &BvhReadOptions {
+            scale: 10.0,
+            ..opts()
+        },
+    )
+    .unwrap();
     assert_eq!(s.position(1, 0), Some([60.0, 40.0, 20.0]));
     assert_eq!(s.rotation_xyz(1, 0), Some([1.0, 3.0, 5.0]));
     assert_eq!(s.joints[1].offset, [5.0, 0.0, 0.0]);
@@ -434,9 +448,15 @@ fn errors() {
     assert!(matches!(e.kind, K::Io(_)));
     // Invalid scale.
     assert!(matches!(
-        parse_bvh(HEAD, &BvhReadOptions { scale: f64::NAN })
-            .unwrap_err()
-            .kind,
+        parse_bvh(
+            HEAD,
+            &BvhReadOptions {
+                scale: f64::NAN,
+                ..opts()
+            }
+        )
+        .unwrap_err()
+        .kind,
         K::Invalid(_)
     ));
 }
@@ -567,4 +587,43 @@ fn salsa_parse_throughput() {
         s,
         out as f64 / 1e6 / s
     );
+}
+
+/// A header's rate can be wrong (the CMU salsa BVHs say 120 fps for a 60 fps capture) or
+/// missing: `BvhReadOptions::frame_time` replaces it; without it, a zero or missing frame time
+/// is an error with its line.
+#[test]
+fn a_given_frame_time_replaces_a_wrong_zero_or_missing_header() {
+    use BvhErrorKind as K;
+    let with_time = |t: &str| format!("{HEAD}MOTION\nFrames: 2\nFrame Time: {t}\n1 2 3\n4 5 6\n");
+    let sixty = BvhReadOptions {
+        frame_time: Some(1.0 / 60.0),
+        ..opts()
+    };
+    // Wrong header: the frames stay, their times change.
+    let header = parse_bvh(&with_time("0.008333"), &opts()).unwrap();
+    let given = parse_bvh(&with_time("0.008333"), &sixty).unwrap();
+    assert_eq!(
+        (header.data.clone(), header.frames),
+        (given.data.clone(), given.frames)
+    );
+    assert_eq!(given.nominal_fps(), 60.0);
+    // Zero in the header: an error at its line, unless a frame time is given.
+    assert!(matches!(
+        kind(&with_time("0")),
+        K::BadFrameTime { line: 9, .. }
+    ));
+    assert_eq!(parse_bvh(&with_time("0"), &sixty).unwrap().data, given.data);
+    // No `Frame Time:` line at all.
+    let missing = format!("{HEAD}MOTION\nFrames: 2\n1 2 3\n4 5 6\n");
+    assert!(matches!(kind(&missing), K::MissingFrameTime { line: 9 }));
+    assert_eq!(parse_bvh(&missing, &sixty).unwrap().data, given.data);
+    // A given frame time must be a time.
+    for bad in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+        let o = BvhReadOptions {
+            frame_time: Some(bad),
+            ..opts()
+        };
+        assert!(parse_bvh(&with_time("0.01"), &o).is_err(), "{bad}");
+    }
 }

@@ -77,17 +77,27 @@ fn collect_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-pub fn load_set(inputs: &[PathBuf], protocol: &Protocol, fps: Option<f64>) -> Result<Vec<Clip>> {
+/// Every clip of `inputs`. `fps`: the rate of `.npy` inputs (`--fps`); `source_fps`: the rate
+/// every input was sampled at, whatever its header says (`--source-fps`).
+pub fn load_set(
+    inputs: &[PathBuf],
+    protocol: &Protocol,
+    fps: Option<f64>,
+    source_fps: Option<f64>,
+) -> Result<Vec<Clip>> {
     collect_files(inputs)?
         .into_iter()
-        .map(|path| load_clip(&path, protocol, fps).with_context(|| format!("{}", path.display())))
+        .map(|path| {
+            load_clip(&path, protocol, fps, source_fps)
+                .with_context(|| format!("{}", path.display()))
+        })
         .collect()
 }
 
 /// Raw joints of a file: `(dancers, joints per dancer, frame rate stored in the file)`.
 type Raw = (Vec<Vec<f64>>, usize, Option<f64>);
 
-fn read_raw(path: &Path) -> Result<Raw> {
+fn read_raw(path: &Path, source_fps: Option<f64>) -> Result<Raw> {
     let is_npy = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
@@ -107,7 +117,11 @@ fn read_raw(path: &Path) -> Result<Raw> {
             _ => {}
         }
     }
-    let m = dancegen_motion::formats::load_motion_file(path)?;
+    let read = dancegen_motion::formats::LoadOptions {
+        source_fps,
+        ..Default::default()
+    };
+    let m = dancegen_motion::formats::load_motion_file_with(path, &read)?;
     let fps = f64::from(m.fps());
     let (shape, p) = dancegen_motion::formats::joint_positions(path, &m)?;
     let p: Vec<f64> = p.into_iter().map(f64::from).collect();
@@ -125,8 +139,15 @@ fn read_raw(path: &Path) -> Result<Raw> {
 }
 
 /// Reads one clip (Y-up joints, one or more dancers) and applies the protocol to each dancer.
-fn load_clip(path: &Path, protocol: &Protocol, fps_arg: Option<f64>) -> Result<Clip> {
-    let (raw, joints, file_fps) = read_raw(path)?;
+fn load_clip(
+    path: &Path,
+    protocol: &Protocol,
+    fps_arg: Option<f64>,
+    source_fps: Option<f64>,
+) -> Result<Clip> {
+    let (raw, joints, file_fps) = read_raw(path, source_fps)?;
+    // A raw-joints .npy has no header: --source-fps is its rate.
+    let fps_arg = fps_arg.or(source_fps);
     let fps = match (file_fps, fps_arg, protocol.fps) {
         (Some(f), Some(a), _) if (f - a).abs() > 1e-3 => {
             bail!(

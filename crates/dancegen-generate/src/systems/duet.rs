@@ -9,7 +9,9 @@ use std::path::Path;
 
 use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
 use dancegen_motion::couple_separation::SeparationConfig;
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_motion::formats::{
+    ConvertOptions, LoadOptions, LoadedMotion, convert_motion, load_motion_file_with,
+};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
@@ -82,8 +84,18 @@ impl DuetOptions {
 /// The leader file as SMPL 24 at 30 fps, or an error naming the file. Any format `convert`
 /// reads; a humanoid BVH is retargeted.
 pub fn load_leader(path: &Path) -> Result<SmplMotion, GenerateError> {
+    load_leader_at(path, None)
+}
+
+/// [`load_leader`] of a file sampled at `source_fps` whatever its header says (`--leader-fps`;
+/// `None`: the file's own rate).
+pub fn load_leader_at(path: &Path, source_fps: Option<f64>) -> Result<SmplMotion, GenerateError> {
     let invalid = |why: String| GenerateError::Invalid(format!("{}: {why}", path.display()));
-    let loaded = load_motion_file(path)?;
+    let read = LoadOptions {
+        source_fps,
+        rate_flag: "--leader-fps",
+    };
+    let loaded = load_motion_file_with(path, &read)?;
     let opts = ConvertOptions {
         to_smpl24: true,
         fps: Some(FPS as f32),
