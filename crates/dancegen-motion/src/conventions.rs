@@ -13,6 +13,14 @@
 //!   EDGE renders and trains in Z-up; that is an edge conversion, see [`yup_to_zup_point`] and
 //!   [`yup_to_zup_root_quat`] (anchors.md C.2). AIST++ stores centimetres and a per-sequence
 //!   scale; its importer turns them into metres (shared data README).
+//! - **The floor is y = 0**, where the joints of a resting foot are: the lowest foot joint
+//!   (ankles 7/8, toes 10/11) of a planted foot has height 0, as LODGE's and EDGE's grounding
+//!   put it (the SMPL toe joint sits at the ball of the foot, a few centimetres above the
+//!   sole, so a mesh foot sinks that much; the capsule body's foot likewise). Retargeting
+//!   ([`crate::formats::convert_motion`] to SMPL 24) and the training sets put each take's
+//!   resting feet there ([`crate::repr::motion::planted_floor_height`]); generated motion is
+//!   grounded the same way. Raw imports that keep their recording's world frame (AIST++
+//!   `.pkl`, SMPL `.npz`) are left where they are.
 //!
 //! # Time
 //! - The frame rate is **stored with every motion**, never assumed. Models use

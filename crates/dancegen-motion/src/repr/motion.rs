@@ -54,6 +54,59 @@ pub enum GroundMode {
 /// Percentile of [`GroundMode::SupportFeet`].
 pub const SUPPORT_PERCENTILE: f32 = 10.0;
 
+/// A foot joint moving slower than this (m/s, 3D) is planted, for [`planted_floor_height`]:
+/// capture noise and pivots move a planted foot joint at 0.05-0.15 m/s in the real takes, a
+/// swinging foot at 0.5 m/s and more.
+pub const PLANTED_SPEED_MS: f32 = 0.25;
+
+/// Share of frames with a planted lowest foot joint below which [`planted_floor_height`] has
+/// too little to go on (a take that is mostly jumps, spins or floor work).
+pub const MIN_PLANTED_SHARE: f32 = 0.1;
+
+/// The floor a dancer stands on, from world joints `(T, 24, 3)` at `fps`: the median height of
+/// the lowest foot joint (7, 8, 10, 11) over the frames in which that joint is planted (moves
+/// slower than [`PLANTED_SPEED_MS`] to the next frame). A standing or stepping dancer's lowest
+/// foot joint is its support foot, which rests on the floor, so its height when still is the
+/// floor; the median ignores the few frames where capture or retargeting noise drops a foot
+/// through the floor, and jumps (the lowest foot moving) do not count. `None` when fewer than
+/// [`MIN_PLANTED_SHARE`] of the frames have a planted lowest foot joint.
+///
+/// Why not the clip minimum or a low percentile ([`GroundMode`]): both put the floor where the
+/// feet are lowest, not where they rest. On the CMU salsa takes retargeted to SMPL the resting
+/// feet are 2-3 cm above their 10th percentile, so the 10th percentile leaves the dancer
+/// floating on a few centimetres; the planted median puts the resting toe joints on y = 0.
+pub fn planted_floor_height(joints: &[f32], fps: f32) -> Option<f32> {
+    let t = joints.len() / (SMPL_JOINTS * 3);
+    if t < 2 || !(fps.is_finite() && fps > 0.0) {
+        return None;
+    }
+    let at = |f: usize, j: usize| -> [f32; 3] {
+        let i = (f * SMPL_JOINTS + j) * 3;
+        [joints[i], joints[i + 1], joints[i + 2]]
+    };
+    let step = PLANTED_SPEED_MS / fps;
+    let mut planted: Vec<f32> = (0..t - 1)
+        .filter_map(|f| {
+            let j = FOOT_JOINTS
+                .into_iter()
+                .min_by(|&a, &b| at(f, a)[1].total_cmp(&at(f, b)[1]))?;
+            let (p, q) = (at(f, j), at(f + 1, j));
+            let d = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
+            (d < step).then_some(p[1])
+        })
+        .collect();
+    if (planted.len() as f32) < MIN_PLANTED_SHARE * t as f32 {
+        return None;
+    }
+    planted.sort_by(f32::total_cmp);
+    let n = planted.len();
+    Some(if n % 2 == 1 {
+        planted[n / 2]
+    } else {
+        0.5 * (planted[n / 2 - 1] + planted[n / 2])
+    })
+}
+
 /// SMPL 24 motion, see the module documentation for the exact layout.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SmplMotion {
@@ -279,6 +332,19 @@ impl SmplMotion {
     /// that was subtracted from every root y.
     pub fn put_on_ground_with(&mut self, mode: GroundMode) -> Result<f32, ReprError> {
         let h = Self::ground_height(&self.joints_world()?, mode);
+        for p in self.trans.chunks_exact_mut(3) {
+            p[1] -= h;
+        }
+        Ok(h)
+    }
+
+    /// Shifts the root vertically so the floor the dancer stands on is y = 0: the planted
+    /// feet's floor ([`planted_floor_height`]), or [`GroundMode::SupportFeet`] for a take with
+    /// too few planted frames. Returns the height that was subtracted.
+    pub fn put_feet_on_floor(&mut self) -> Result<f32, ReprError> {
+        let joints = self.joints_world()?;
+        let h = planted_floor_height(&joints, self.fps)
+            .unwrap_or_else(|| Self::ground_height(&joints, GroundMode::SupportFeet));
         for p in self.trans.chunks_exact_mut(3) {
             p[1] -= h;
         }
