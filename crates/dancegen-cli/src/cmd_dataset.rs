@@ -59,6 +59,7 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
             clip_seconds: args.clip_seconds,
             hold_out_shapes: args.hold_out_shape.clone(),
         },
+        source_fps: dancegen_dataset::takes::SourceRates::new(args.source_fps.clone()),
     };
     let pb = ProgressBar::new(0);
     if quiet {
@@ -78,6 +79,9 @@ fn run_build(args: &DatasetBuildArgs, quiet: bool) -> Result<()> {
     if !quiet {
         let m = &report.manifest;
         let mut out = std::io::stdout().lock();
+        if !m.takes.is_empty() {
+            write!(out, "{}", dancegen_dataset::takes::table(&m.takes))?;
+        }
         write!(out, "{}", summary_table(m))?;
         writeln!(
             out,

@@ -188,6 +188,8 @@ pub(crate) fn build_dd100(
                 source: t.follower.clone(),
                 genre: genre.clone(),
                 motion: cut(&follower),
+                source_fps: f64::from(follower.fps),
+                rate_from: crate::takes::RateFrom::Header,
             };
             let no_warp = WarpReport {
                 min_rate: 1.0,

@@ -55,7 +55,7 @@ fn couples(opts: &BuildOptions) -> Result<Vec<Couple>, DatasetError> {
             .as_deref()
             .map(genre::normalize)
             .unwrap_or_else(|| genre::genre_from_name(&s));
-        let units = load_units(path, &genre)?;
+        let units = load_units(path, &genre, &opts.source_fps)?;
         match units.len() {
             1 => {
                 let key = couple_key(&s).ok_or_else(|| {

@@ -258,7 +258,7 @@ pub(crate) fn build_layout(
         .map(|p| {
             let song = &songs[by_path[p.song.as_path()]];
             let mut out = Vec::new();
-            for unit in load_units(&p.motion, &p.genre)? {
+            for unit in load_units(&p.motion, &p.genre, &crate::takes::SourceRates::default())? {
                 if let Some(c) = original_clip(&unit, song, p.held_out)? {
                     out.push(write_clip(&opts.out, &c)?);
                 }

@@ -36,6 +36,7 @@ pub mod group;
 pub mod holistic_synth;
 pub mod layouts;
 pub mod manifest;
+pub mod takes;
 /// The beat warp lives in the motion crate (the generation library aligns generated dances with
 /// it too); re-exported under its old path.
 pub use dancegen_motion::beat_warp as warp;
@@ -47,7 +48,7 @@ use std::path::{Path, PathBuf};
 use dancegen_metrics::FRAME_LEN;
 use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, try_motion_beats};
 use dancegen_motion::formats::{
-    ConvertOptions, LoadedMotion, NpzStyle, convert_motion, load_motion_file, save_motion_file,
+    ConvertOptions, LoadedMotion, NpzStyle, convert_motion, load_motion_file_with, save_motion_file,
 };
 use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use dancegen_music::FrameMatrix;
@@ -127,6 +128,9 @@ pub struct BuildOptions {
     pub merge_genres: Vec<(String, String)>,
     /// Group pairing only ([`group`]).
     pub group: group::GroupOptions,
+    /// The rate each `motions` input was captured at, where its header is wrong or missing
+    /// ([`takes::SourceRates`]); the others are read at their header's rate.
+    pub source_fps: takes::SourceRates,
 }
 
 impl BuildOptions {
@@ -147,6 +151,7 @@ impl BuildOptions {
             songs_per_motion: 1,
             merge_genres: Vec::new(),
             group: group::GroupOptions::default(),
+            source_fps: takes::SourceRates::default(),
         }
     }
 }
@@ -279,12 +284,30 @@ pub(crate) struct MotionUnit {
     pub source: PathBuf,
     pub genre: String,
     pub motion: SmplMotion,
+    /// The rate the source file was read at, and where it came from.
+    pub source_fps: f64,
+    pub rate_from: takes::RateFrom,
 }
 
 /// Loads a motion file as SMPL 24 at 30 fps: BVH retargeted, 60 fps strided (EDGE), each dancer
 /// of a group file separately (`<stem>_d<k>`).
-pub(crate) fn load_units(path: &Path, genre: &str) -> Result<Vec<MotionUnit>, DatasetError> {
-    let loaded = load_motion_file(path)?;
+pub(crate) fn load_units(
+    path: &Path,
+    genre: &str,
+    rates: &takes::SourceRates,
+) -> Result<Vec<MotionUnit>, DatasetError> {
+    let given = rates.rate_for(path);
+    let read = dancegen_motion::formats::LoadOptions {
+        source_fps: given,
+        ..Default::default()
+    };
+    let loaded = load_motion_file_with(path, &read)?;
+    let source_fps = f64::from(loaded.fps());
+    let rate_from = if given.is_some() {
+        takes::RateFrom::Given
+    } else {
+        takes::RateFrom::Header
+    };
     let opts = ConvertOptions {
         to_smpl24: true,
         fps: Some(FPS as f32),
@@ -298,6 +321,8 @@ pub(crate) fn load_units(path: &Path, genre: &str) -> Result<Vec<MotionUnit>, Da
         source: path.to_path_buf(),
         genre: genre.to_string(),
         motion,
+        source_fps,
+        rate_from,
     };
     match converted {
         LoadedMotion::Smpl(m) => Ok(vec![unit(s.clone(), m)]),
@@ -348,11 +373,11 @@ pub(crate) fn write_clip(out: &Path, c: &ClipData) -> Result<ClipEntry, DatasetE
         npz_style: NpzStyle::Amass,
         ..Default::default()
     };
-    // Every clip stands on the floor y = 0 (where its supporting foot usually is), the
-    // convention the solo model's foot features and contact thresholds assume.
+    // Every clip stands on the floor y = 0 (where its resting feet are), the convention the
+    // solo model's foot features and contact thresholds assume.
     let mut motion = c.motion.clone();
     motion
-        .put_on_ground_with(dancegen_motion::repr::motion::GroundMode::SupportFeet)
+        .put_feet_on_floor()
         .map_err(|e| DatasetError::input(&motion_path, e))?;
     save_motion_file(&motion_path, &LoadedMotion::Smpl(motion), &opts)?;
     dancegen_io::write_npy_f32(&out.join(&music_rel), &[frames, EDGE35_DIM], &c.music)?;
@@ -399,7 +424,9 @@ pub(crate) fn write_couple_clip(
     let mut both = world_joints(follower, &unit.source)?;
     both.extend(world_joints(leader, &unit.source)?);
     let both: Vec<f32> = both.into_iter().map(|v| v as f32).collect();
-    let floor = SmplMotion::ground_height(&both, GroundMode::SupportFeet);
+    // One floor for both (they dance on the same one): where their resting feet are.
+    let floor = dancegen_motion::repr::motion::planted_floor_height(&both, follower.fps)
+        .unwrap_or_else(|| SmplMotion::ground_height(&both, GroundMode::SupportFeet));
     let lowered = |m: &SmplMotion| {
         let mut m = m.clone();
         for p in m.trans.chunks_exact_mut(3) {
@@ -480,6 +507,7 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
         ));
     }
     let merges = merge_table(&opts.merge_genres)?;
+    let takes = survey_takes(opts, progress)?;
     let mut clips = match opts.pairing {
         Pairing::Pseudo => build_pseudo(opts, progress)?,
         Pairing::Duet => duet::build_duet(opts, progress)?,
@@ -496,7 +524,64 @@ pub fn build(opts: &BuildOptions, progress: &dyn Progress) -> Result<BuildReport
         progress.stage("synthesising hands and faces", 0);
         holistic_synth::attach::attach(&opts.out, &mut clips, opts.seed)?;
     }
-    finish(&opts.out, clips)
+    finish(&opts.out, clips, takes)
+}
+
+/// Every `--motion` take's rate, tempo and floor ([`takes`]), each take out of the range of
+/// real dance warned about by name. Pairings from a data set root read their own layout and
+/// are not surveyed.
+fn survey_takes(
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<takes::TakeEntry>, DatasetError> {
+    if !matches!(
+        opts.pairing,
+        Pairing::Pseudo | Pairing::Duet | Pairing::Group
+    ) {
+        if !opts.source_fps.is_empty() {
+            return Err(DatasetError::Options(
+                "--source-fps applies to --motion inputs (pseudo, duet and group pairing); a \
+                 data set layout has its own rates"
+                    .into(),
+            ));
+        }
+        return Ok(Vec::new());
+    }
+    let files = expand_motion_inputs(&opts.motions)?;
+    opts.source_fps.check_used(&files)?;
+    progress.stage("measuring takes", files.len());
+    let per_file: Vec<Result<Vec<takes::TakeEntry>, DatasetError>> = files
+        .par_iter()
+        .map(|path| {
+            let g = opts
+                .genre
+                .as_deref()
+                .map(genre::normalize)
+                .unwrap_or_else(|| genre::genre_from_name(&stem(path)));
+            let g = merge_table(&opts.merge_genres)?
+                .get(&g)
+                .cloned()
+                .unwrap_or(g);
+            let entries = takes::measure(path, &g, &opts.source_fps);
+            progress.step(&stem(path));
+            entries
+        })
+        .collect();
+    let mut out = Vec::new();
+    for r in per_file {
+        out.extend(r?);
+    }
+    for t in &out {
+        if let Some(w) = &t.warning {
+            tracing::warn!(
+                "take {} ({}, read at {} fps): {w}",
+                t.name,
+                t.source,
+                t.source_fps
+            );
+        }
+    }
+    Ok(out)
 }
 
 /// `--merge-genre` pairs as a map, names normalised like `--genre`; a genre merged into one
@@ -524,7 +609,11 @@ fn merge_table(pairs: &[(String, String)]) -> Result<BTreeMap<String, String>, D
     Ok(map)
 }
 
-fn finish(out: &Path, mut clips: Vec<ClipEntry>) -> Result<BuildReport, DatasetError> {
+fn finish(
+    out: &Path,
+    mut clips: Vec<ClipEntry>,
+    takes: Vec<takes::TakeEntry>,
+) -> Result<BuildReport, DatasetError> {
     clips.sort_by(|a, b| a.name.cmp(&b.name));
     let genres: BTreeSet<String> = clips.iter().map(|c| c.genre.clone()).collect();
     let held_out = clips
@@ -538,6 +627,7 @@ fn finish(out: &Path, mut clips: Vec<ClipEntry>) -> Result<BuildReport, DatasetE
         genres: genres.into_iter().collect(),
         clips,
         held_out,
+        takes,
     };
     let manifest_path = out.join("manifest.json");
     manifest.write(&manifest_path)?;
@@ -694,7 +784,7 @@ fn build_pseudo(
                 &train_songs
             };
             let mut entries = Vec::new();
-            let mut units = load_units(path, &genre)?;
+            let mut units = load_units(path, &genre, &opts.source_fps)?;
             if opts.mirror && !motion_held {
                 let mirrored: Vec<MotionUnit> = units.iter().map(mirrored_unit).collect();
                 units.extend(mirrored);

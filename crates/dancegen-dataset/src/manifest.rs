@@ -97,6 +97,10 @@ pub struct Manifest {
     pub clips: Vec<ClipEntry>,
     /// Names of the clips kept out of training (stored under `held_out/`).
     pub held_out: Vec<String>,
+    /// Every `--motion` take as read: its rate (given or from its header), kinematic tempo
+    /// and floor ([`crate::takes`]). Empty for data set layouts and older manifests.
+    #[serde(default)]
+    pub takes: Vec<crate::takes::TakeEntry>,
 }
 
 impl Manifest {

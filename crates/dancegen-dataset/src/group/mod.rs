@@ -190,7 +190,7 @@ fn load_sources(opts: &BuildOptions) -> Result<(Vec<Source>, Vec<CouplePair>), D
             .as_deref()
             .map(genre::normalize)
             .unwrap_or_else(|| genre::genre_from_name(&s));
-        let loaded = load_units(path, &g)?;
+        let loaded = load_units(path, &g, &opts.source_fps)?;
         let first = units.len();
         let k = loaded.len();
         units.extend(loaded);
