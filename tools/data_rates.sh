@@ -26,7 +26,7 @@ out = sys.argv[1]
 true = json.load(open(f"{out}/true/manifest.json"))["takes"]
 header = json.load(open(f"{out}/header/manifest.json"))["takes"]
 why = {
-    "salsa": "60 (header: 120) — the capture rate; at 120 each foot steps 2.4-3.4 times a second",
+    "salsa": "60 (header: 120) — the capture rate (shared/data/README.md: at 120 each foot lifts 2.0-2.4 times a second, salsa at ~320 BPM)",
     "modern": "120 (header) — cgspeed conversion rate; steps and speeds of a dancer",
     "whirl": "120 (header) — cgspeed conversion rate",
     "break": "30 (header) for CMU 85 (keijiro's FBX sample rate); 60 for AIST++ (its release)",
