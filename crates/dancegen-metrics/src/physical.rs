@@ -45,14 +45,18 @@ pub const CONTACT_HEIGHT_M: f64 = 0.05;
 /// (`foot_skating.py`, 8 cm; `crate::foot_skating::ANKLE_CONTACT_HEIGHT`).
 pub const ANKLE_CONTACT_M: f64 = 0.08;
 /// A joint moving faster than this over one frame step is a spike (a teleport, not a movement).
-/// The fastest human limb motions measured are martial-arts kicks, with peak foot speeds of
-/// 14-16 m/s (elite taekwondo roundhouse kicks); punches reach 9-12 m/s. No dancer's joint
-/// travels at 20 m/s, so a step over it is an artefact of generation or capture.
+/// In the real takes at their true rates (30 fps), the fastest single-frame joint step of CMU
+/// subject 05 is 0.46 m (13.8 m/s), of the breakdance takes 0.65 m (19.5 m/s, a flip), of AIST++
+/// 0.51 m; the salsa takes have three steps over it (up to 0.83 m, 25 m/s: a salsa dancer's hand
+/// does not move that fast, so we read them as capture glitches). `dancegen eval --fps 30
+/// --metrics max_step,spikes` on the converted takes.
 pub const SPIKE_SPEED_MS: f64 = 20.0;
 /// A foot is at rest while its slower joint (ankle or toe) moves slower than this, and moving
 /// once its slower joint moves faster than [`STEP_MOVE_SPEED_MS`] (hysteresis, so capture noise
-/// on a planted foot does not count steps). Planted feet in the real takes move at 0.05-0.15 m/s
-/// (capture noise and pivots), a stepping foot's slower joint at 0.5-2 m/s.
+/// on a planted foot does not count steps). In the real takes at their true rates (salsa, CMU 05
+/// and 85, 30 fps) the slower foot joint's speed has its lower quartile at 0.04-0.15 m/s (resting
+/// feet: capture noise, pivots) and its upper quartile at 0.8-2.7 m/s (stepping feet); 0.2 and
+/// 0.4 m/s lie between the two (measured once with a numpy script on the converted takes).
 pub const STEP_REST_SPEED_MS: f64 = 0.2;
 /// See [`STEP_REST_SPEED_MS`].
 pub const STEP_MOVE_SPEED_MS: f64 = 0.4;
@@ -83,27 +87,28 @@ pub struct Physical {
 }
 
 impl Physical {
-    /// `(key, value)` in the module table's order; `None` where undefined.
+    /// `(key, value)` in [`KEYS`] order; `None` where undefined.
     pub fn entries(&self) -> [(&'static str, Option<f64>); 13] {
-        [
-            ("floor_median", Some(self.floor_median)),
-            ("floor_p05", Some(self.floor_p05)),
-            ("floor_p95", Some(self.floor_p95)),
-            ("float", Some(self.float_pct)),
-            ("foot_slide", self.foot_slide),
-            ("jerk", Some(self.jerk_mean)),
-            ("jerk_p99", Some(self.jerk_p99)),
-            ("max_step", Some(self.max_step)),
-            ("spikes", Some(self.spikes as f64)),
-            ("leg_cross", Some(self.leg_cross_pct)),
-            ("joint_speed", Some(self.joint_speed)),
-            ("pelvis_speed", Some(self.pelvis_speed)),
-            ("step_rate", Some(self.step_rate)),
-        ]
+        let values = [
+            Some(self.floor_median),
+            Some(self.floor_p05),
+            Some(self.floor_p95),
+            Some(self.float_pct),
+            self.foot_slide,
+            Some(self.jerk_mean),
+            Some(self.jerk_p99),
+            Some(self.max_step),
+            Some(self.spikes as f64),
+            Some(self.leg_cross_pct),
+            Some(self.joint_speed),
+            Some(self.pelvis_speed),
+            Some(self.step_rate),
+        ];
+        std::array::from_fn(|i| (KEYS[i], values[i]))
     }
 }
 
-/// The keys of [`Physical::entries`], in order.
+/// The keys of the figures, in the module table's order.
 pub const KEYS: [&str; 13] = [
     "floor_median",
     "floor_p05",
@@ -231,10 +236,13 @@ pub fn physical(joints: &[f64], fps: f64) -> Result<Physical, FeatureError> {
 ///   left knee is right of the right knee **and** the left ankle right of the right ankle.
 ///
 /// Ankles alone crossing over is dance (a cross-body step, ballet's fifth position and
-/// croisé: the ankle order is swapped in 14 % of the real salsa frames and 47 % of CMU
-/// subject 05's), so it does not count; both the knees and the ankles swapped happens in
-/// 0.1 % of the salsa frames, 2.1 % of subject 05's and 2.4 % of the breakdance takes'
-/// (all at their true rates, `dancegen eval --metrics leg_cross`).
+/// croisé): the ankle order along the hip axis is swapped in 14 % of the real salsa frames and
+/// 47 % of CMU subject 05's, so it does not count. Knees and ankles both swapped: 0.1 % of the
+/// salsa frames, 2.1 % of subject 05's, 2.4 % of the breakdance takes' (both measured once with
+/// a numpy script on the takes converted at their true rates). With both tests, as
+/// `dancegen eval --fps 30 --metrics leg_cross` computes it on those takes: salsa 2.0 % (one
+/// take, 61_12, 16.5 %: its shin axes pass within 5 cm), subject 05 3.6 %, subject 85 2.7 %, AIST++
+/// 1.0 %.
 pub fn shins_crossed(j: &[[f64; 3]; 24]) -> bool {
     let radius = CAPSULES
         .iter()

@@ -198,3 +198,17 @@ fn bad_input_is_an_error() {
     assert!(physical(&j, 0.0).is_err());
     assert!(physical(&j, f64::NAN).is_err());
 }
+
+#[test]
+fn entries_name_each_figure_by_its_key() {
+    let j = rest_body(60, |t| [0.0, if t < 30 { 0.0 } else { 0.3 }, 0.0]);
+    let p = physical(&j, FPS).unwrap();
+    let get = |k: &str| p.entries().into_iter().find(|(n, _)| *n == k).unwrap().1;
+    assert_eq!(get("float"), Some(p.float_pct));
+    assert_eq!(get("floor_p95"), Some(p.floor_p95));
+    assert_eq!(get("jerk"), Some(p.jerk_mean));
+    assert_eq!(get("spikes"), Some(p.spikes as f64));
+    assert_eq!(get("step_rate"), Some(p.step_rate));
+    let keys: Vec<&str> = p.entries().iter().map(|(k, _)| *k).collect();
+    assert_eq!(keys, dancegen_metrics::physical::KEYS);
+}

@@ -49,8 +49,9 @@ use serde_json::{Value, json};
 use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
 use input::Clip;
 
-/// Every metric `eval` knows, in table order (names are a contract: external checks read them).
-const METRICS: [&str; 37] = [
+/// The metrics `eval` knew before the physical figures ([`all_metrics`] adds them), in table
+/// order (names are a contract: external checks read them).
+const METRICS: [&str; 24] = [
     "fid_k",
     "fid_g",
     "div_k",
@@ -75,23 +76,11 @@ const METRICS: [&str; 37] = [
     "inverted",
     "boundary_jerk",
     "genre",
-    "floor_median",
-    "floor_p05",
-    "floor_p95",
-    "float",
-    "foot_slide",
-    "jerk",
-    "jerk_p99",
-    "max_step",
-    "spikes",
-    "leg_cross",
-    "joint_speed",
-    "pelvis_speed",
-    "step_rate",
 ];
 
-/// Metrics with one value per clip, in `per_clip` order.
-const PER_CLIP: [&str; 29] = [
+/// Metrics with one value per clip, in `per_clip` order ([`per_clip_metrics`] adds the
+/// physical figures).
+const PER_CLIP: [&str; 16] = [
     "bas",
     "pfc",
     "fsr",
@@ -108,20 +97,17 @@ const PER_CLIP: [&str; 29] = [
     "bed",
     "ipr",
     "contact_range",
-    "floor_median",
-    "floor_p05",
-    "floor_p95",
-    "float",
-    "foot_slide",
-    "jerk",
-    "jerk_p99",
-    "max_step",
-    "spikes",
-    "leg_cross",
-    "joint_speed",
-    "pelvis_speed",
-    "step_rate",
 ];
+
+/// Every metric name, in table order: [`METRICS`], then the physical figures.
+fn all_metrics() -> impl Iterator<Item = &'static str> {
+    METRICS.into_iter().chain(dancegen_metrics::physical::KEYS)
+}
+
+/// Every per-clip metric, in `per_clip` order: [`PER_CLIP`], then the physical figures.
+fn per_clip_metrics() -> impl Iterator<Item = &'static str> {
+    PER_CLIP.into_iter().chain(dancegen_metrics::physical::KEYS)
+}
 
 /// Names that stand for several metrics in `--metrics`.
 const GROUPS: [(&str, &str); 2] = [
@@ -202,10 +188,10 @@ fn parse_metric_list(list: &str) -> Result<Option<Vec<String>>> {
                     push(k, &mut out);
                 }
             }
-            _ if METRICS.contains(&m) => push(m, &mut out),
+            _ if all_metrics().any(|k| k == m) => push(m, &mut out),
             _ => bail!(
                 "unknown metric {m}; known: {}, or a group: {}",
-                METRICS.join(","),
+                all_metrics().collect::<Vec<_>>().join(","),
                 GROUPS.map(|(g, what)| format!("{g} ({what})")).join(", ")
             ),
         }
@@ -279,11 +265,10 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         None => {
             let gt_stems: Vec<String> = gt.iter().map(Clip::stem).collect();
             let paired = pred.iter().any(|c| gt_stems.contains(&c.stem()));
-            METRICS
-                .iter()
+            all_metrics()
                 .filter(|m| offer.default_on(m, args))
                 // By default mpjpe only when some --pred clip has a --gt clip of its stem.
-                .filter(|m| **m != "mpjpe" || paired)
+                .filter(|m| *m != "mpjpe" || paired)
                 .map(|m| m.to_string())
                 .collect()
         }
@@ -361,7 +346,7 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
             };
             row.insert("genre".into(), v);
         }
-        for m in PER_CLIP.into_iter().filter(|m| want(m)) {
+        for m in per_clip_metrics().filter(|m| want(m)) {
             let (v, quiet_none) = match m {
                 "bas" => (solo::clip_bas(clip, music, variant)?, false),
                 "mpjpe" => match gt_by_stem.get(&clip.stem()) {
@@ -411,7 +396,7 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         }
         per_clip.push(Value::Object(row));
     }
-    for m in PER_CLIP.into_iter().filter(|m| want(m)) {
+    for m in per_clip_metrics().filter(|m| want(m)) {
         let vals: Vec<f64> = columns
             .get(m)
             .into_iter()
