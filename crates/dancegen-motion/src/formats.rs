@@ -19,6 +19,7 @@ use crate::bvh::{self, Bvh, BvhReadOptions, BvhWriteOptions};
 use crate::bvh_motion::{self, bvh_world_positions};
 use crate::fbx::{self, FbxOptions};
 use crate::gltf::{self, DancerAnimation, GlbOptions};
+use crate::repr::ReprError;
 use crate::repr::finedance::FineDanceMotion;
 use crate::repr::group::GroupMotion;
 use crate::repr::motion::SmplMotion;
@@ -100,16 +101,16 @@ pub struct LoadOptions {
     /// same, their times change (a BVH whose header says 120 fps for a 60 fps capture plays
     /// at half speed with `Some(60.0)`). In `(0, MAX_SOURCE_FPS]`.
     pub source_fps: Option<f64>,
-    /// The command-line flag that sets `source_fps`, named in the error of a file whose header
-    /// has no usable rate (`--source-fps`, `--leader-fps`).
-    pub rate_flag: &'static str,
+    /// How the user gives the rate, named in the error of a file whose header has no usable
+    /// rate: a command-line flag (`--source-fps N`, `--leader-fps N`) or another way.
+    pub rate_hint: &'static str,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
         LoadOptions {
             source_fps: None,
-            rate_flag: "--source-fps",
+            rate_hint: "--source-fps N",
         }
     }
 }
@@ -126,6 +127,11 @@ pub fn check_source_fps(fps: f64) -> Result<f64, String> {
     }
 }
 
+/// The error of a file whose stored rate is missing or unusable: `why`, then how to give it.
+fn no_rate(why: &str, hint: &str) -> String {
+    format!("{why}; the file's frame rate is unknown: give the rate it was captured at ({hint})")
+}
+
 /// Reads any supported motion file (see the module table) at the rate stored in it.
 pub fn load_motion_file(path: &Path) -> Result<LoadedMotion, FormatError> {
     load_motion_file_with(path, &LoadOptions::default())
@@ -134,7 +140,7 @@ pub fn load_motion_file(path: &Path) -> Result<LoadedMotion, FormatError> {
 /// Reads any supported motion file, at [`LoadOptions::source_fps`] when it is given.
 pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMotion, FormatError> {
     if let Some(fps) = opts.source_fps {
-        check_source_fps(fps).map_err(|e| err(path, format!("{}: {e}", opts.rate_flag)))?;
+        check_source_fps(fps).map_err(|e| err(path, format!("the given rate: {e}")))?;
     }
     if !path.exists() {
         return Err(err(path, "no such file"));
@@ -149,14 +155,9 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
             };
             let b = bvh::read_bvh(path, &read).map_err(|e| match e.kind {
                 bvh::BvhErrorKind::BadFrameTime { .. }
-                | bvh::BvhErrorKind::MissingFrameTime { .. } => err(
-                    path,
-                    format!(
-                        "{}; the file's frame rate is unknown: give the rate it was captured \
-                         at with {} N",
-                        e.kind, opts.rate_flag
-                    ),
-                ),
+                | bvh::BvhErrorKind::MissingFrameTime { .. } => {
+                    err(path, no_rate(&e.kind.to_string(), opts.rate_hint))
+                }
                 _ => err(path, e.kind),
             })?;
             LoadedMotion::Bvh(b)
@@ -168,20 +169,9 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
             };
             crate::smpl_npz::read_smpl_npz(path, &read)
                 .map(|n| LoadedMotion::Smpl(n.motion))
-                .map_err(|e| {
-                    let text = e.to_string();
-                    if text.contains("mocap_framerate") && fps.is_none() {
-                        err(
-                            path,
-                            format!(
-                                "{text}; the file's frame rate is unknown: give the rate it \
-                                 was captured at with {} N",
-                                opts.rate_flag
-                            ),
-                        )
-                    } else {
-                        err(path, text)
-                    }
+                .map_err(|e| match e {
+                    ReprError::NoRate { why, .. } => err(path, no_rate(&why, opts.rate_hint)),
+                    other => err(path, other),
                 })?
         }
         "npy" => load_npy(path)?,

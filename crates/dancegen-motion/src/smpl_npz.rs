@@ -191,7 +191,10 @@ pub fn read_smpl_npz(path: &Path, opts: &SmplNpzOptions) -> Result<SmplNpz, Repr
     let fps = match opts.fps {
         Some(f) if f.is_finite() && f > 0.0 => f,
         Some(f) => return Err(bad(format!("the given frame rate {f} is not positive"))),
-        None => fps_of(&get, layout).map_err(bad)?,
+        None => fps_of(&get, layout).map_err(|why| ReprError::NoRate {
+            path: path.to_path_buf(),
+            why,
+        })?,
     };
     let z = match layout {
         SmplNpzLayout::Amass => opts.up == UpAxis::Z,
@@ -501,6 +504,47 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// An AMASS file without a rate member is refused as `NoRate` (so a caller can say how to
+    /// give one), unless the rate is given; a given rate overrides a stored one.
+    #[test]
+    fn a_missing_rate_is_no_rate_unless_one_is_given() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = 4;
+        let poses = vec![0.0f64; t * 72];
+        let trans = vec![0.0f64; t * 3];
+        let write = |name: &str, rate: Option<f64>| {
+            let p = dir.path().join(name);
+            let (ps, ts) = ([t, 72], [t, 3]);
+            let mut members = vec![
+                ("poses", &ps[..], NpyData::F64(&poses)),
+                ("trans", &ts[..], NpyData::F64(&trans)),
+            ];
+            let r = rate.map(|r| [r]);
+            if let Some(r) = &r {
+                members.push(("mocap_framerate", &[][..], NpyData::F64(r)));
+            }
+            write_npz(&p, &members).unwrap();
+            p
+        };
+        let none = write("none.npz", None);
+        match read_smpl_npz(&none, &SmplNpzOptions::default()) {
+            Err(ReprError::NoRate { path, .. }) => assert_eq!(path, none),
+            other => panic!("expected NoRate, got {other:?}"),
+        }
+        let given = SmplNpzOptions {
+            fps: Some(60.0),
+            ..Default::default()
+        };
+        assert_eq!(read_smpl_npz(&none, &given).unwrap().motion.fps, 60.0);
+        let stored = write("stored.npz", Some(120.0));
+        assert_eq!(read_smpl_npz(&stored, &given).unwrap().motion.fps, 60.0);
+        let bad = SmplNpzOptions {
+            fps: Some(0.0),
+            ..Default::default()
+        };
+        assert!(read_smpl_npz(&stored, &bad).is_err());
     }
 
     #[test]

@@ -82,18 +82,31 @@ impl DuetOptions {
 }
 
 /// The leader file as SMPL 24 at 30 fps, or an error naming the file. Any format `convert`
-/// reads; a humanoid BVH is retargeted.
+/// reads; a humanoid BVH is retargeted. A file with no usable rate is refused with `dancegen
+/// convert --source-fps` as the way to give one (the web app takes no rate).
 pub fn load_leader(path: &Path) -> Result<SmplMotion, GenerateError> {
-    load_leader_at(path, None)
+    load_leader_with(
+        path,
+        None,
+        "convert it first: dancegen convert FILE --source-fps N -o leader.npz",
+    )
 }
 
-/// [`load_leader`] of a file sampled at `source_fps` whatever its header says (`--leader-fps`;
-/// `None`: the file's own rate).
+/// [`load_leader`] of a file sampled at `source_fps` whatever its header says (the CLI's
+/// `--leader-fps`; `None`: the file's own rate).
 pub fn load_leader_at(path: &Path, source_fps: Option<f64>) -> Result<SmplMotion, GenerateError> {
+    load_leader_with(path, source_fps, "--leader-fps N")
+}
+
+fn load_leader_with(
+    path: &Path,
+    source_fps: Option<f64>,
+    rate_hint: &'static str,
+) -> Result<SmplMotion, GenerateError> {
     let invalid = |why: String| GenerateError::Invalid(format!("{}: {why}", path.display()));
     let read = LoadOptions {
         source_fps,
-        rate_flag: "--leader-fps",
+        rate_hint,
     };
     let loaded = load_motion_file_with(path, &read)?;
     let opts = ConvertOptions {

@@ -60,6 +60,13 @@ pub enum ReprError {
     },
     #[error("{0}")]
     Invalid(String),
+    /// A file whose stored frame rate is missing or not a positive number; its reader can be
+    /// given the rate instead.
+    #[error("{}: {why}", path.display())]
+    NoRate {
+        path: std::path::PathBuf,
+        why: String,
+    },
     #[error(transparent)]
     Fk(#[from] crate::fk::FkError),
     #[error(transparent)]
