@@ -192,14 +192,28 @@ pub fn measure(
     genre: &str,
     rates: &SourceRates,
 ) -> Result<Vec<TakeEntry>, DatasetError> {
-    crate::load_units(path, genre, rates)?
-        .iter()
-        .map(take_entry)
-        .collect()
+    let mut out = Vec::new();
+    for unit in crate::load_units(path, genre, rates)? {
+        match take_entry(&unit)? {
+            Some(t) => out.push(t),
+            // The pairing drops it too (shorter than a clip); nothing to measure or warn about.
+            None => tracing::warn!(
+                "{}: {} has {} frames, too few to measure its tempo",
+                path.display(),
+                unit.name,
+                unit.motion.frames()
+            ),
+        }
+    }
+    Ok(out)
 }
 
-/// The entry of one loaded dancer (already at 30 fps, SMPL 24).
-pub(crate) fn take_entry(unit: &MotionUnit) -> Result<TakeEntry, DatasetError> {
+/// The entry of one loaded dancer (already at 30 fps, SMPL 24); `None` for a take too short
+/// for the figures.
+fn take_entry(unit: &MotionUnit) -> Result<Option<TakeEntry>, DatasetError> {
+    if unit.motion.frames() < dancegen_metrics::physical::MIN_FRAMES {
+        return Ok(None);
+    }
     let mut m = unit.motion.clone();
     m.put_feet_on_floor()
         .map_err(|e| DatasetError::input(&unit.source, e))?;
@@ -207,7 +221,7 @@ pub(crate) fn take_entry(unit: &MotionUnit) -> Result<TakeEntry, DatasetError> {
     let fps = f64::from(m.fps);
     let p = physical(&joints, fps)
         .map_err(|e| DatasetError::input(&unit.source, format!("kinematic tempo: {e}")))?;
-    Ok(TakeEntry {
+    Ok(Some(TakeEntry {
         name: unit.name.clone(),
         source: unit.source.display().to_string(),
         genre: unit.genre.clone(),
@@ -220,7 +234,7 @@ pub(crate) fn take_entry(unit: &MotionUnit) -> Result<TakeEntry, DatasetError> {
         floor_median: p.floor_median,
         float_pct: p.float_pct,
         warning: tempo_warning(&unit.genre, p.joint_speed, p.step_rate),
-    })
+    }))
 }
 
 /// The table `dataset build` prints, one line per take.

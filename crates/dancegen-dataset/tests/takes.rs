@@ -80,11 +80,17 @@ fn trusted_takes_lie_in_their_genres_range_and_stand_on_the_floor() {
         );
         assert!(inside(t.joint_speed, all_speed) && inside(t.step_rate, all_steps));
         assert!(t.warning.is_none(), "{}: {:?}", t.name, t.warning);
-        // Retargeting and the survey put the resting feet on y = 0: the lowest foot joint is
-        // within a few centimetres of the floor half of the time (breakdance floor work and
-        // ballet's relevés lift it more).
+        // The survey puts the resting feet on y = 0, so the lowest foot joint's median height
+        // is near 0. Measured: every retargeted CMU take within 0.017 m (05_16, jumps); the
+        // AIST++ breakdance takes 0.047 and 0.059 m (their hops keep the feet off the floor in
+        // half the frames). Bounds: 2 cm and 7 cm, a centimetre over what was measured.
+        let bound = if t.source.ends_with(".pkl") {
+            0.07
+        } else {
+            0.02
+        };
         assert!(
-            t.floor_median.abs() < 0.06,
+            t.floor_median.abs() < bound,
             "{}: floor {}",
             t.name,
             t.floor_median
