@@ -9,7 +9,8 @@
 
 use std::path::{Path, PathBuf};
 
-use dancegen_metrics::physical::physical;
+use dancegen_metrics::physical::{Physical, physical};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{DatasetError, MotionUnit, world_joints};
@@ -185,16 +186,31 @@ pub fn tempo_warning(genre: &str, joint_speed: f64, step_rate: f64) -> Option<St
     Some(format!("{} ({hint})", out.join("; ")))
 }
 
-/// Every dancer of one motion file as a data set reads it (`rates` gives its capture rate, if
-/// any), with its figures and, when out of range for `genre`, its warning.
-pub fn measure(
+/// One dancer of an input take, read as a data set reads it (at its given or header rate,
+/// resampled to 30 fps, retargeted to SMPL 24, its feet put on the floor), with every
+/// physical figure. The real reference that generated dances are held to (the plausibility
+/// gate, the eval reports) is computed this way, so it moves with the data's true rates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TakeFigures {
+    /// Dancer name (the file stem, `_d<k>` for group files).
+    pub name: String,
+    pub genre: String,
+    pub source_fps: f64,
+    pub rate_from: RateFrom,
+    pub seconds: f64,
+    pub figures: Physical,
+}
+
+/// Every dancer of one motion file with its physical figures ([`TakeFigures`]); a dancer too
+/// short for the figures is skipped with a warning.
+pub fn measure_figures(
     path: &Path,
     genre: &str,
     rates: &SourceRates,
-) -> Result<Vec<TakeEntry>, DatasetError> {
+) -> Result<Vec<TakeFigures>, DatasetError> {
     let mut out = Vec::new();
     for unit in crate::load_units(path, genre, rates)? {
-        match take_entry(&unit)? {
+        match unit_figures(&unit)? {
             Some(t) => out.push(t),
             // The pairing drops it too (shorter than a clip); nothing to measure or warn about.
             None => tracing::warn!(
@@ -208,9 +224,58 @@ pub fn measure(
     Ok(out)
 }
 
-/// The entry of one loaded dancer (already at 30 fps, SMPL 24); `None` for a take too short
-/// for the figures.
-fn take_entry(unit: &MotionUnit) -> Result<Option<TakeEntry>, DatasetError> {
+/// [`measure_figures`] of every motion file `inputs` name (directories: their motion files),
+/// each dancer's genre from its file name as `dataset build` infers it: the real motion a
+/// model trained on these inputs is held to.
+pub fn measure_inputs(
+    inputs: &[PathBuf],
+    rates: &SourceRates,
+) -> Result<Vec<TakeFigures>, DatasetError> {
+    let files = crate::expand_motion_inputs(inputs)?;
+    rates.check_used(&files)?;
+    let per_file: Vec<Result<Vec<TakeFigures>, DatasetError>> = files
+        .par_iter()
+        .map(|path| {
+            let genre = crate::genre::genre_from_name(&crate::stem(path));
+            measure_figures(path, &genre, rates)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for r in per_file {
+        out.extend(r?);
+    }
+    Ok(out)
+}
+
+/// Every dancer of one motion file as a data set reads it (`rates` gives its capture rate, if
+/// any), with its figures and, when out of range for `genre`, its warning.
+pub fn measure(
+    path: &Path,
+    genre: &str,
+    rates: &SourceRates,
+) -> Result<Vec<TakeEntry>, DatasetError> {
+    Ok(measure_figures(path, genre, rates)?
+        .into_iter()
+        .map(|t| TakeEntry {
+            source: path.display().to_string(),
+            joint_speed: t.figures.joint_speed,
+            pelvis_speed: t.figures.pelvis_speed,
+            step_rate: t.figures.step_rate,
+            floor_median: t.figures.floor_median,
+            float_pct: t.figures.float_pct,
+            warning: tempo_warning(&t.genre, t.figures.joint_speed, t.figures.step_rate),
+            name: t.name,
+            genre: t.genre,
+            source_fps: t.source_fps,
+            rate_from: t.rate_from,
+            seconds: t.seconds,
+        })
+        .collect())
+}
+
+/// The figures of one loaded dancer (already at 30 fps, SMPL 24); `None` for a take too short
+/// for them.
+fn unit_figures(unit: &MotionUnit) -> Result<Option<TakeFigures>, DatasetError> {
     if unit.motion.frames() < dancegen_metrics::physical::MIN_FRAMES {
         return Ok(None);
     }
@@ -219,21 +284,15 @@ fn take_entry(unit: &MotionUnit) -> Result<Option<TakeEntry>, DatasetError> {
         .map_err(|e| DatasetError::input(&unit.source, e))?;
     let joints = world_joints(&m, &unit.source)?;
     let fps = f64::from(m.fps);
-    let p = physical(&joints, fps)
+    let figures = physical(&joints, fps)
         .map_err(|e| DatasetError::input(&unit.source, format!("kinematic tempo: {e}")))?;
-    Ok(Some(TakeEntry {
+    Ok(Some(TakeFigures {
         name: unit.name.clone(),
-        source: unit.source.display().to_string(),
         genre: unit.genre.clone(),
         source_fps: unit.source_fps,
         rate_from: unit.rate_from,
         seconds: m.frames() as f64 / fps,
-        joint_speed: p.joint_speed,
-        pelvis_speed: p.pelvis_speed,
-        step_rate: p.step_rate,
-        floor_median: p.floor_median,
-        float_pct: p.float_pct,
-        warning: tempo_warning(&unit.genre, p.joint_speed, p.step_rate),
+        figures,
     }))
 }
 
