@@ -29,13 +29,18 @@ import tomllib
 from array import array
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting helpers)
+from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk, formatting, physical helpers)
     boundary_jerk_ratio,
+    contact_section,
     fmt,
     load,
     mean_joint_jerk,
     motion,
     opt_load,
+    physical_note,
+    physical_over,
+    physical_table,
+    rates_note,
     stats,
     write_npy,
     write_report,
@@ -349,6 +354,30 @@ def cmd_report(args):
       "value is `dancegen eval`'s over its 4 clips (FID/Div: of the set, the others: the mean "
       "over the clips, PFC: EDGE's mean × 10⁴).")
     w("")
+
+    # ---- physical plausibility of the followers (+ the contact sheet)
+    n_train = sum(1 for f in os.listdir(os.path.join(out, "gt_train")) if f.endswith(".npy")) \
+        if os.path.isdir(os.path.join(out, "gt_train")) else 0
+    w("## Physical plausibility (followers)")
+    w("")
+    prow = [(f"real followers (the {len(clips)} held-out clips)",
+             physical_over([os.path.join(out, "eval", "real", "physical.json")])),
+            (f"real followers (the {n_train} training clips)",
+             physical_over([os.path.join(out, "eval", "real", "physical_train.json")]))]
+    for name, label, _ in run:
+        prow.append((label_of(name, label), physical_over(
+            [os.path.join(out, "eval", name, f"seed{s}", "physical.json") for s in done[name]])))
+    for b_out, b_label in zip(args.baseline, args.baseline_label):
+        prow.append((f"before: {b_label} (`{b_out}`)", physical_over(
+            [os.path.join(b_out, "eval", "full", f"seed{s}", "physical.json") for s in seeds])))
+    physical_table(w, prow)
+    physical_note(w, rates_note(meta.get("manifest")),
+                  "The followers alone (`dancegen eval --pred DIR --fps 30 --metrics physical`, "
+                  f"no leader), {len(clips)} held-out clips per seed; generated rows are mean ± "
+                  "standard deviation over the seeds"
+                  + ("; \"-\": a baseline run that did not measure the figures." if args.baseline
+                     else "."))
+    contact_section(w, os.path.join(out, "contact.json"), args.report, "### Contact sheet")
 
     # ---- targets
     def verdict(ok):

@@ -33,9 +33,17 @@
 #                        its full system is added as a "before" row; BASELINE_LABEL names it
 #   FRESH=1              regenerate everything (otherwise outputs of the same model files and
 #                        flags are reused)
+#   CONTACT=1            draw the contact sheet (tools/contact_sheet.sh): the first seed's full
+#                        system and the real couple of the first held-out clip, at the same
+#                        moments, to images/duet-eval-contact.png beside the report (default: 1,
+#                        0 in a dry run)
+#
+# Every follower, generated and real, also gets the physical plausibility figures
+# (`dancegen eval --metrics physical`).
 #
 # --dry-run: no model; each "generated" follower is the real held-out follower moved by a few cm
-# per seed (tests the plumbing end to end). Writes to $OUT/dry-run/ and never to docs/.
+# per seed (tests the plumbing end to end). Writes to $OUT/dry-run/ and never to docs/
+# (CONTACT=1: its sheet to $OUT/dry-run/images/).
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -61,6 +69,8 @@ if [ "$DRY" = 1 ]; then
 fi
 mkdir -p "$OUT"
 OUT=$(realpath "$OUT")
+CONTACT=${CONTACT:-$((1 - DRY))}
+CONTACT_PNG=$(dirname "$REPORT")/images/duet-eval-contact.png
 HELP="$PYTHON $ROOT/tools/duet_eval.py"
 T0=$(date +%s)
 LOAD_NOTE=$(load_note)
@@ -133,18 +143,23 @@ REAL_WINDOW=$(window_of full)
 [ -n "$REAL_WINDOW" ] && [ "$REAL_WINDOW" != 0 ] || REAL_WINDOW=240
 
 # ---- clips: held-out (generation + eval) and all real clips (FID reference), as joints
-mkdir -p "$OUT/gt" "$OUT/leader" "$OUT/gt_all" "$OUT/gt_leader_all" "$OUT/eval/real"
+mkdir -p "$OUT/gt" "$OUT/leader" "$OUT/gt_all" "$OUT/gt_leader_all" "$OUT/gt_train" "$OUT/eval/real"
 $HELP clips --manifest "$DATASET/manifest.json" --root "$ROOT" \
     --heldout "$OUT/clips.txt" --all "$OUT/all.txt"
 while read -r stem mot lead; do
     "$BIN" -q convert "$mot" -o "$OUT/gt_all/$stem.npy"
     "$BIN" -q convert "$lead" -o "$OUT/gt_leader_all/$stem.npy"
 done < "$OUT/all.txt"
-rm -f "$OUT"/gt/*.npy "$OUT"/leader/*.npy
+rm -f "$OUT"/gt/*.npy "$OUT"/leader/*.npy "$OUT"/gt_train/*.npy
 while read -r stem _; do
     ln -f "$OUT/gt_all/$stem.npy" "$OUT/gt/$stem.npy"
     ln -f "$OUT/gt_leader_all/$stem.npy" "$OUT/leader/$stem.npy"
 done < "$OUT/clips.txt"
+# The training followers (every real clip but the held-out ones), for the physical figures.
+while read -r stem _; do
+    awk -v s="$stem" '$1 == s {f = 1} END {exit !f}' "$OUT/clips.txt" \
+        || ln -f "$OUT/gt_all/$stem.npy" "$OUT/gt_train/$stem.npy"
+done < "$OUT/all.txt"
 NCLIPS=$(wc -l < "$OUT/clips.txt")
 log "$NCLIPS held-out clips, $(wc -l < "$OUT/all.txt") real clips in the FID reference; configurations: ${RUN:-none}"
 
@@ -221,7 +236,12 @@ eval_set() { # pred_dir window out.json
         --gt-leader "$OUT/gt_leader_all" --fps 30 --window "$2" --metrics "$METRICS" \
         --json "$3" > /dev/null
 }
+eval_physical() { # pred_dir out.json: the physical plausibility figures of the followers alone
+    "$BIN" -q eval --pred "$1" --fps 30 --metrics physical --json "$2" > /dev/null
+}
 eval_set "$OUT/gt" "$REAL_WINDOW" "$OUT/eval/real/eval.json"
+eval_physical "$OUT/gt" "$OUT/eval/real/physical.json"
+eval_physical "$OUT/gt_train" "$OUT/eval/real/physical_train.json"
 # Every real couple's BED, for the report's sense of scale.
 "$BIN" -q eval --pred "$OUT/gt_all" --leader "$OUT/gt_leader_all" --fps 30 --metrics bed \
     --json "$OUT/eval/real_all_bed.json" > /dev/null
@@ -237,9 +257,34 @@ for cfg in $RUN; do
         fi
         mkdir -p "$e"
         eval_set "$d" "$(window_of "$cfg")" "$e/eval.json"
+        eval_physical "$d" "$e/physical.json"
     done
     log "evaluated $cfg"
 done
+
+# ---- contact sheet: the first seed's full system and the real couple of the first held-out
+# clip, at the same moments (not in a dry run unless CONTACT=1: there "generated" is real)
+rm -f "$OUT/contact.json"
+if [ "$CONTACT" = 1 ]; then
+    read -r stem start song _ < "$OUT/clips.txt"
+    read -r seed _ <<< "$SEEDS"
+    g=$OUT/gen/full/seed$seed/$stem.npy
+    if [ -f "$g" ]; then
+        name=$(awk -F'\t' '$1 == "full" {print $9}' "$OUT/configs.tsv")
+        caption="ReactDance \`$name\` (full system, seed $seed): the follower it made"
+        [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real follower standing in for a generated one"
+        caption="$caption for the real leader of the held-out clip \`$stem\`, and the real couple"
+        caption="$caption ($(basename "$song") from $(awk -v a="$start" 'BEGIN{printf "%.1f", a}') s;"
+        caption="$caption leader blue, follower orange)"
+        $PYTHON "$ROOT/tools/solo_eval.py" contact --bin "$BIN" --png "$CONTACT_PNG" \
+            --info "$OUT/contact.json" --work "$OUT/contact" --caption "$caption" \
+            "generated follower (full, seed $seed)=$OUT/leader/$stem.npy+$g" \
+            "real couple $stem=$OUT/leader/$stem.npy+$OUT/gt/$stem.npy" \
+            || log "contact sheet failed; the report has none"
+    else
+        log "no contact sheet: $g was not generated"
+    fi
+fi
 
 # ---- report
 WALL=$(( $(date +%s) - T0 ))
@@ -275,6 +320,7 @@ $HELP meta --out "$OUT/meta.json" \
     "wall=$((WALL / 60)) min $((WALL % 60)) s" \
     "steps=$STEPS" \
     "real_window=$REAL_WINDOW" \
+    "manifest=$(realpath "$DATASET/manifest.json")" \
     "seed_note=${SEED_NOTE:-}"
 RFLAGS=()
 [ "$DRY" = 1 ] && RFLAGS+=(--dry-run)

@@ -13,7 +13,11 @@ file (a keyframe every second). Metrics:
   for N = 2, GMR / GMC / TIF against the held-out real salsa couples;
 - here: boundary jerk at the window joins and the largest root step within ±5 frames of a
   join, trajectory error against the requested path and the share of dances whose final
-  left-to-right order is the requested one.
+  left-to-right order is the requested one;
+- the physical plausibility figures (`dancegen eval --metrics physical`) of every dancer, and
+  of the held-out real solo tracks (the CMU salsa read at its true 60 fps);
+- a contact sheet (tools/contact_sheet.sh): the first clip's full-system dance (first seed) and
+  the held-out real salsa couple 13, at the same moments.
 
 Standard library only (3.11+). Subcommand-free: one run does everything, reusing finished
 generations in OUT.
@@ -23,16 +27,23 @@ import argparse
 import json
 import math
 import os
+import shutil
 import statistics
 import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk and formatting helpers)
+from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk, formatting, physical helpers)
     boundary_jerk_ratio,
+    contact_section,
     fmt,
+    make_contact_sheet,
     mean_joint_jerk,
+    physical_note,
+    physical_over,
+    physical_table,
+    rates_note,
     read_npy,
     stats,
     write_npy,
@@ -46,6 +57,9 @@ JOIN_BAND = 5  # frames either side of a join searched for a root jump (group.md
 LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placing B1
 HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
 HELD_SOLO = HELD_TAKES + ["05_07"]
+# True capture rates of the held-out takes whose BVH header states another (docs/data-rates.md:
+# the CMU salsa at 60 fps, its headers say 120); the others are read at their header's rate.
+SOURCE_FPS = {stem: 60 for stem in HELD_TAKES}
 
 GROUP_ARGS = []  # --group-args, split (module-wide: every group `generate` gets them)
 
@@ -175,6 +189,18 @@ def real_references(binary, data, out):
     (2, 300, 24, 3) scenes."""
     solo_dir = os.path.join(out, "real", "solo")
     couple_dir = os.path.join(out, "real", "couples")
+    # The real clips are converted once; an earlier run that read them at other rates (before
+    # SOURCE_FPS: the salsa at its headers' 120 fps, twice too fast) is converted again.
+    stamp = os.path.join(out, "real", "source_fps.json")
+    want = {stem: SOURCE_FPS.get(stem) for stem in HELD_SOLO}
+    if os.path.isdir(os.path.join(out, "real")):
+        try:
+            have = json.load(open(stamp))
+        except (OSError, ValueError):
+            have = None
+        if have != want:
+            log("real references: converted at other rates before; converting them again")
+            shutil.rmtree(os.path.join(out, "real"))
     os.makedirs(solo_dir, exist_ok=True)
     os.makedirs(couple_dir, exist_ok=True)
     full = {}
@@ -184,7 +210,9 @@ def real_references(binary, data, out):
             src = os.path.join(data, "cmu-dance", "modern", stem + ".bvh")
         dst = os.path.join(out, "real", stem + ".npy")
         if not os.path.exists(dst):
-            run([binary, "convert", src, "--to", "smpl24", "--fps", "30", "-o", dst, "-q"])
+            rate = ["--source-fps", str(SOURCE_FPS[stem])] if stem in SOURCE_FPS else []
+            run([binary, "convert", src, "--to", "smpl24"] + rate + ["--fps", "30", "-o", dst,
+                                                                     "-q"])
         shape, a = read_npy(dst)
         full[stem] = (shape[0], a)
         for s in windows(shape[0], 300, 150):
@@ -198,6 +226,8 @@ def real_references(binary, data, out):
             if not os.path.exists(p):
                 write_npy(p, list(a[s * 72:(s + 300) * 72]) + list(b[s * 72:(s + 300) * 72]),
                           shape=(2, 300, 24, 3))
+    with open(stamp, "w") as f:
+        json.dump(want, f)
     return solo_dir, couple_dir
 
 
@@ -387,6 +417,9 @@ def evaluate(binary, args, clips, out):
                  "--metrics", "fid_k,div_k,pfc,fsr", "--json", ej, "-q"])
             run([binary, "eval", "--fps", "30", "--pred"] + [s for _, s in scenes] +
                 ["--metrics", "gmc,tif,collision,min_distance", "--json", sj, "-q"])
+            pj = os.path.join(out, "eval", f"{cfg}_seed{seed}_physical.json")
+            run([binary, "eval", "--fps", "30", "--pred"] + dancers +
+                ["--metrics", "physical", "--json", pj, "-q"])
             n2 = [s for c, s in scenes if c["dancers"] == 2]
             cj = os.path.join(out, "eval", f"{cfg}_seed{seed}_couples.json")
             if n2:
@@ -408,6 +441,8 @@ def evaluate(binary, args, clips, out):
                 "jump": jump,
                 "spread": statistics.fmean(spread),
                 "scene_paths": [s for _, s in scenes],
+                "dancer_paths": dancers,
+                "physical": pj,
                 "metas": metas,
             }
     rj = os.path.join(out, "eval", "real_couples.json")
@@ -418,6 +453,10 @@ def evaluate(binary, args, clips, out):
          "div_k,pfc,fsr",
          "--json", rs, "-q"])
     real_solo = json.load(open(rs))
+    rp = os.path.join(out, "eval", "real_solo_physical.json")
+    run([binary, "eval", "--fps", "30", "--pred", solo_gt, "--metrics", "physical", "--json", rp,
+         "-q"])
+    real_solo["physical_json"] = rp
     spreads = []
     for f in sorted(os.listdir(solo_gt)):
         shape, a = read_npy(os.path.join(solo_gt, f))
@@ -555,6 +594,29 @@ def report(args, clips, results, real_couples, real_solo, started, load_note):
                  f"{fmt(g0('full', coll_of), None, 2, 100.0)} % against "
                  f"{fmt(g0('lgds', coll_of), None, 2, 100.0)} %.")
         L.append("")
+    # physical plausibility (+ the contact sheet)
+    L.append("## Physical plausibility (every dancer)")
+    L.append("")
+    prow = []
+    for cfg, label in [(k, label) for k, label, _, _ in CONFIGS] + \
+            [(k, label) for k, label, _ in ABLATIONS]:
+        if (cfg, seeds[0]) in results:
+            prow.append((label, physical_over([results[(cfg, s)]["physical"] for s in seeds
+                                               if (cfg, s) in results])))
+    prow.append(("real held-out solo tracks (salsa 13 and 14, modern 05_07; 10 s clips)",
+                 physical_over([real_solo["physical_json"]])))
+    physical_table(L.append, prow)
+    physical_note(
+        L.append,
+        "Here the real tracks are converted from the BVH files by this script "
+        "(`dancegen convert --to smpl24 --source-fps 60 --fps 30` for the salsa, the header's "
+        "rate for 05_07). "
+        + rates_note(os.path.join(args.dataset, "manifest.json"),
+                     "the group data set (the model's training data)"),
+        "Every dancer of every clip as one clip (`dancegen eval --fps 30 --metrics physical` on "
+        "the dancers split from the scenes); rows are mean ± standard deviation over the seeds.")
+    contact_section(L.append, os.path.join(args.out, "contact.json"), args.report,
+                    "### Contact sheet")
     # motion energy
     L.append("## Motion energy and dependence on the seed")
     L.append("")
@@ -684,6 +746,8 @@ def main():
     ap.add_argument("--group-args", default="",
                     help="extra `dancegen generate` arguments for the group dances, e.g. "
                     "'--guidance 1' (the report names them)")
+    ap.add_argument("--contact-png", default="",
+                    help="where to draw the contact sheet (none without it)")
     ap.add_argument("--ablation", nargs="*", default=[], metavar="KEY=BUNDLE",
                     help="ablation bundles to add as rows, e.g. no_fp=target/ablations/no_fp")
     args = ap.parse_args()
@@ -696,7 +760,34 @@ def main():
         raise SystemExit(f"{args.dataset}: no held-out group clips with N = 2, 3 or 5")
     log(f"{len(clips)} clips: {' '.join(c['name'] for c in clips)}")
     results, real_couples, real_solo = evaluate(args.bin, args, clips, args.out)
+    contact(args, clips, results)
     report(args, clips, results, real_couples, real_solo, started, args.load_note)
+
+
+def contact(args, clips, results):
+    """The contact sheet: the first clip danced by the full system (first seed) and the held-out
+    real salsa couple 13 (takes 60_13 / 61_13 from their start), at the same moments."""
+    info = os.path.join(args.out, "contact.json")
+    if os.path.exists(info):
+        os.remove(info)
+    seed = args.seeds[0]
+    if not args.contact_png:
+        return
+    if ("full", seed) not in results:
+        log("no contact sheet: the full system was not run")
+        return
+    c = clips[0]
+    gen = [p for p in results[("full", seed)]["dancer_paths"]
+           if os.path.basename(p).startswith(c["name"] + "_d")]
+    real = [os.path.join(args.out, "real", f"{t}.npy") for t in ("60_13_scaled", "61_13_scaled")]
+    caption = (f"TCDiff++ (`{os.path.relpath(args.model)}`, full system, seed {seed}) dancing "
+               f"the held-out clip `{c['name']}` ({c['dancers']} dancers, "
+               f"{os.path.basename(c['song'])} from {c['start']:.1f} s), and the held-out real "
+               "salsa couple 13 (takes 60_13 and 61_13 from their start, at 60 fps)")
+    make_contact_sheet(args.bin, args.contact_png, info, caption,
+                       [(f"generated {c['name']} (full, seed {seed})", gen),
+                        ("real couple 13", real)],
+                       os.path.join(args.out, "contact"))
 
 
 if __name__ == "__main__":

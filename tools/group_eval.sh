@@ -19,6 +19,12 @@
 #   ABLATIONS="full_500=DIR no_fp=DIR no_fa=DIR no_dpe=DIR no_dl=DIR": bundles of the
 #     configs/ablations/tcdiffpp_*_500.toml runs (`dancegen bundle --group RUN -o DIR`), added
 #     as the report's ablation rows
+#   CONTACT=1   draw the contact sheet (tools/contact_sheet.sh: the first clip's full-system
+#     dance, first seed, and the real couple 13 at the same moments) to
+#     images/group-eval-contact.png beside the report (0: none)
+#
+# Every dancer, generated and real, also gets the physical plausibility figures
+# (`dancegen eval --metrics physical`); the held-out real salsa is read at its true 60 fps.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -36,6 +42,9 @@ DATASET=${DATASET:-$ROOT/target/datasets/group}
 OUT=${OUT:-$ROOT/target/group-eval}
 REPORT=${REPORT:-$ROOT/docs/group-eval.md}
 PYTHON=${PYTHON:-python3}
+CONTACT=${CONTACT:-1}
+CONTACT_PNG=""
+[ "$CONTACT" = 1 ] && CONTACT_PNG=$(dirname "$REPORT")/images/group-eval-contact.png
 LOAD_NOTE=$(load_note)
 [ -f "$DATASET/manifest.json" ] || { echo "$DATASET/manifest.json missing: build the group data set (configs/tcdiffpp_small.toml)" >&2; exit 1; }
 mkdir -p "$OUT"
@@ -45,4 +54,4 @@ snapshot_binary "${DANCEGEN:-$ROOT/target/release/dancegen}" "$OUT"
     --data "$ROOT/../shared/data" --model "$MODEL" --solo-model "$SOLO_MODEL" --out "$OUT" \
     --report "$REPORT" --seeds $SEEDS --per-n "$PER_N" ${STEPS:+--steps "$STEPS"} \
     --load-note "$LOAD_NOTE" ${ABLATIONS:+--ablation $ABLATIONS} \
-    ${ONLY:+--only $ONLY} --group-args "${GROUP_ARGS:-}"
+    ${ONLY:+--only $ONLY} --group-args "${GROUP_ARGS:-}" --contact-png "$CONTACT_PNG"

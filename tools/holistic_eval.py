@@ -34,6 +34,17 @@ import tomllib
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from solo_eval import (  # noqa: E402  (the physical figures and contact sheet of every report)
+    contact_section,
+    genre_clips,
+    physical_note,
+    physical_over,
+    physical_subset,
+    physical_table,
+    rates_note,
+)
+
 FPS = 30.0
 BOUNDARY_BAND = 2  # dancegen_metrics::longform::BOUNDARY_BAND
 LEFT_BASES = [22, 25, 28, 31]  # left_index1, left_middle1, left_pinky1, left_ring1
@@ -639,6 +650,46 @@ def cmd_report(args):
           "post-processing, not part of SoulNet; before it was added the same model skated in "
           "82 % of frames).")
     w("")
+
+    # ---- physical plausibility (+ the contact sheet)
+    w("### Physical plausibility")
+    w("")
+    prow = [(f"real held-out motion ({len(clips)} clips)",
+             physical_over([os.path.join(ev, "real", "physical.json")])),
+            (f"real: the {n_train} training clips",
+             physical_over([os.path.join(ev, "real", "physical_train.json")]))]
+    # The training clips of the held-out clips' genre(s), when the data set has others too.
+    manifest = os.path.join(meta["dataset_abs"], "manifest.json")
+    held_genres = {c["genre"] for c in (opt_load(manifest) or {}).get("clips", [])
+                   if c["name"] in clips}
+    same = genre_clips(manifest, held_genres) - set(clips)
+    train = {os.path.splitext(f)[0] for f in os.listdir(os.path.join(out, "gt_train"))}
+    if same & train and same & train != train:
+        prow.append((f"real: the {len(same & train)} {' / '.join(sorted(held_genres))} training "
+                     "clips (the held-out clips' genre)",
+                     physical_subset(os.path.join(ev, "real", "physical_train.json"), same)))
+    prow.append((f"SoulNet, held-out segments ({len(done)} seed{'s' if len(done) != 1 else ''})",
+                 physical_over([os.path.join(ev, f"seed{s}", "physical.json") for s in done])))
+    prow.append((f"SoulNet, whole song ({len(done_long)} "
+                 f"seed{'s' if len(done_long) != 1 else ''})",
+                 physical_over([os.path.join(ev, f"seed{s}", "physical_long.json")
+                                for s in done_long])))
+    for g, r in cfg_rows:
+        if r is not None:
+            prow.append((f"SoulNet, held-out segments, guidance {g} "
+                         f"({'the default; ' if r['reused'] else ''}seed 0)",
+                         physical_over([os.path.join(ev, f"cfg{g}", "physical.json")])))
+    for name, mdir, _, _ in mmr_cmp:
+        prow.append((f"{'with' if name == 'with' else 'without'} the MMR loss (`{mdir}`, "
+                     "held-out segments)",
+                     physical_over([os.path.join(ev, "mmr", name, f"seed{s}", "physical.json")
+                                    for s in seeds])))
+    physical_table(w, prow)
+    physical_note(w, rates_note(os.path.join(meta["dataset_abs"], "manifest.json")),
+                  "The body as in the tables above (SMPL-24-shaped joints; `dancegen eval "
+                  "--protocol none --fps 30 --metrics physical`); generated rows are mean ± "
+                  "standard deviation over the seeds (the guidance rows: seed 0 alone).")
+    contact_section(w, os.path.join(out, "contact.json"), args.report, "### Contact sheet")
 
     # ---- 3. boundary jerk
     w("## 3. Boundary jerk at window joins")

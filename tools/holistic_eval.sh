@@ -32,9 +32,17 @@
 #                          segments and SEEDS (without MMR_LOSS_MODEL section 7 says so)
 #   SEED_NOTE="..."        a sentence added to the report
 #   FRESH=1                regenerate everything
+#   CONTACT=1              draw the contact sheet (tools/contact_sheet.sh): the first seed's body
+#                          and the real motion of the first held-out clip, at the same moments,
+#                          to images/holistic-eval-contact.png beside the report (default: 1, 0
+#                          in a dry run)
+#
+# Every body, generated and real, also gets the physical plausibility figures
+# (`dancegen eval --metrics physical`).
 #
 # --dry-run: no model; each "generated" clip is the held-out real body with the synthetic
-# fingers and face, shifted per seed (tests the plumbing). Writes to $OUT/dry-run/ only.
+# fingers and face, shifted per seed (tests the plumbing). Writes to $OUT/dry-run/ only
+# (CONTACT=1: its sheet to $OUT/dry-run/images/).
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -61,6 +69,8 @@ if [ "$DRY" = 1 ]; then
     OUT=$OUT/dry-run
     REPORT=$OUT/holistic-eval.md
 fi
+CONTACT=${CONTACT:-$((1 - DRY))}
+CONTACT_PNG=$(dirname "$REPORT")/images/holistic-eval-contact.png
 HELP="$PYTHON $ROOT/tools/holistic_eval.py"
 SOLO_HELP="$PYTHON $ROOT/tools/solo_eval.py"
 T0=$(date +%s)
@@ -272,10 +282,15 @@ eval_set() { # pred gt out.json
     "${EV[@]}" --pred "$1" --gt "$2" --protocol finedance-lodge \
         --metrics fid_k,fid_g,div_k,div_g --json "$3" >/dev/null
 }
+eval_physical() { # pred (a file or directory) out.json: the physical plausibility figures
+    "${EV[@]}" --pred "$1" --protocol none --fps 30 --metrics physical --json "$2" >/dev/null
+}
 full_set() { # dir: every held-out clip there
     [ "$(find "$1" -maxdepth 1 -name '*.npy' 2>/dev/null | wc -l)" = "$NCLIPS" ]
 }
 eval_clips "$OUT/gt" "$OUT/eval/real/clip.json"
+eval_physical "$OUT/gt" "$OUT/eval/real/physical.json"
+eval_physical "$OUT/gt_train" "$OUT/eval/real/physical_train.json"
 eval_bas "$OUT/eval/real" "$OUT/gt" "$OUT/beats" bas
 eval_bas "$OUT/eval/real" "$OUT/gt" "$OUT/beats_half" bas_half
 eval_set "$OUT/gt_train" "$OUT/gt" "$OUT/eval/real/fid_train.json"
@@ -290,6 +305,7 @@ for seed in $SEEDS; do
         eval_set "$b" "$OUT/gt" "$e/fid.json"
         eval_set "$b" "$OUT/gt_all" "$e/fid_all.json"
         eval_clips "$b" "$e/clip.json"
+        eval_physical "$b" "$e/physical.json"
         eval_bas "$e" "$b" "$OUT/beats" bas
         eval_bas "$e" "$b" "$OUT/beats_half" bas_half
     else
@@ -301,6 +317,7 @@ for seed in $SEEDS; do
             --beats "$OUT/beats/song.npy" --json "$e/long.json" >/dev/null
         "${EV[@]}" --pred "$b/long/song.npy" --protocol none --fps 30 --metrics bas \
             --bas-variant bailando --beats "$OUT/beats_half/song.npy" --json "$e/long_half.json" >/dev/null
+        eval_physical "$b/long/song.npy" "$e/physical_long.json"
     fi
     log "evaluated seed $seed"
 done
@@ -311,6 +328,7 @@ for g in $GUIDANCES; do
     full_set "$b" || { log "skipping guidance $g: not all $NCLIPS generated"; continue; }
     mkdir -p "$e"
     eval_clips "$b" "$e/clip.json"
+    eval_physical "$b" "$e/physical.json"
     eval_set "$b" "$OUT/gt_all" "$e/fid_all.json"
     eval_bas "$e" "$b" "$OUT/beats" bas
     eval_bas "$e" "$b" "$OUT/beats_half" bas_half
@@ -327,6 +345,7 @@ for entry in "${MMR_SETS[@]}"; do
         eval_set "$b" "$OUT/gt" "$e/fid.json"
         eval_set "$b" "$OUT/gt_all" "$e/fid_all.json"
         eval_clips "$b" "$e/clip.json"
+        eval_physical "$b" "$e/physical.json"
         eval_bas "$e" "$b" "$OUT/beats" bas
         eval_bas "$e" "$b" "$OUT/beats_half" bas_half
     done
@@ -382,6 +401,27 @@ else
     echo "no finished VQ run among: $VQ_RUNS" > "$OUT/probe/recon.err"
 fi
 log "probes done"
+
+# ---- contact sheet: the first seed's body and the real motion of the first held-out clip, at
+# the same moments (not in a dry run unless CONTACT=1: there "generated" is real)
+rm -f "$OUT/contact.json"
+if [ "$CONTACT" = 1 ]; then
+    read -r stem start end _ < "$OUT/clips.txt"
+    read -r seed _ <<< "$SEEDS"
+    g=$OUT/body/seed$seed/$stem.npy
+    if [ -f "$g" ]; then
+        span=$(awk -v a="$start" -v b="$end" 'BEGIN{printf "%.1f–%.1f s", a, b}')
+        caption="SoulNet \`$MODEL_NAME\` (\`$(basename "$MODEL")\`, seed $seed, its body as evaluated)"
+        [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real body standing in for generated motion"
+        caption="$caption and the real held-out clip \`$stem\`, on $(basename "$SONG") $span"
+        $SOLO_HELP contact --bin "$BIN" --png "$CONTACT_PNG" --info "$OUT/contact.json" \
+            --work "$OUT/contact" --caption "$caption" \
+            "generated (seed $seed)=$g" "real $stem=$OUT/gt/$stem.npy" \
+            || log "contact sheet failed; the report has none"
+    else
+        log "no contact sheet: $g was not generated"
+    fi
+fi
 
 # ---- report
 WALL=$(( $(date +%s) - T0 ))

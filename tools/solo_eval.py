@@ -5,6 +5,8 @@ Subcommands:
   clips   held-out clips of the manifest as shell-readable lines, and each clip's music beats
   stub    --dry-run "generation": a held-out motion cut / tiled to a length (plumbing only)
   model   window length and name of a Lodge++ model directory (model.toml)
+  contact the report's contact sheet: generated and real motion drawn at the same moments
+          (tools/contact_sheet.sh; also used by the duet and holistic scripts)
   report  collect the `dancegen eval` JSON files, compute the boundary-jerk ratio at the real
           window boundaries of each sampler, and write the Markdown report
 
@@ -243,6 +245,203 @@ def fmt(m, s, digits, scale=1.0):
 
 def opt_load(path):
     return load(path) if os.path.exists(path) else None
+
+
+# ----------------------------------------------------------------------------- physical figures
+# Shared with tools/duet_eval.py, tools/holistic_eval.py and tools/group_eval.py.
+
+# `dancegen eval --metrics physical` keys in the reports' table: key, column header, digits.
+PHYSICAL_COLS = [
+    ("floor_median", "floor_median (m)", 3),
+    ("float", "float (%)", 1),
+    ("foot_slide", "foot_slide (m/s)", 3),
+    ("jerk", "jerk (m/s³)", 0),
+    ("jerk_p99", "jerk_p99 (m/s³)", 0),
+    ("max_step", "max_step (m)", 3),
+    ("spikes", "spikes (count)", 1),
+    ("leg_cross", "leg_cross (%)", 1),
+    ("joint_speed", "joint_speed (m/s)", 3),
+    ("pelvis_speed", "pelvis_speed (m/s)", 3),
+    ("step_rate", "step_rate (1/s)", 2),
+]
+
+
+def physical_over(paths):
+    """{key: (mean, std)} of the physical figures over the `dancegen eval --metrics physical`
+    JSON files that exist (one per seed; one file: std None), or None when none exists (e.g. a
+    baseline run made before the figures were measured)."""
+    figs = [opt_load(p) for p in paths]
+    figs = [f for f in figs if f is not None]
+    if not figs:
+        return None
+    return {k: stats([f.get(k) for f in figs])[:2] for k, _, _ in PHYSICAL_COLS}
+
+
+def physical_subset(path, stems):
+    """{key: (value, None)} of the clips of one `--metrics physical` JSON whose file stems are in
+    `stems`, combined as `dancegen eval` combines a set (the mean; max_step: the largest, spikes:
+    the sum), or None without the file or such clips."""
+    j = opt_load(path)
+    rows = [r for r in (j or {}).get("per_clip", [])
+            if os.path.splitext(os.path.basename(r["file"]))[0] in stems]
+    if not rows:
+        return None
+    out = {}
+    for k, _, _ in PHYSICAL_COLS:
+        v = [r.get(k) for r in rows if r.get(k) is not None]
+        out[k] = (None if not v else max(v) if k == "max_step" else sum(v) if k == "spikes"
+                  else statistics.fmean(v), None)
+    return out
+
+
+def genre_clips(manifest_path, genres):
+    """Names of the data set's clips of the given genres."""
+    m = opt_load(manifest_path) if manifest_path else None
+    return {c["name"] for c in (m or {}).get("clips", []) if c.get("genre") in genres}
+
+
+def physical_table(w, rows):
+    """Writes the physical plausibility table: rows (label, {key: (mean, std)} or None); a row
+    without figures (None) shows "-" in every column."""
+    w("| motion | " + " | ".join(h for _, h, _ in PHYSICAL_COLS) + " |")
+    w("|---|" + "---|" * len(PHYSICAL_COLS))
+    for label, vals in rows:
+        cells = []
+        for k, _, d in PHYSICAL_COLS:
+            if vals is None:
+                cells.append("-")
+                continue
+            m, s = vals.get(k, (None, None))
+            if k == "spikes" and m is not None and s is None and float(m).is_integer():
+                cells.append(str(int(m)))  # one count, not a mean over seeds
+            else:
+                cells.append(fmt(m, s, d))
+        w(f"| {label} | " + " | ".join(cells) + " |")
+    w("")
+
+
+def rates_note(manifest_path, what="the data set"):
+    """What the data set's manifest says about the capture rates its real clips were read at,
+    with a warning when the CMU salsa was read at its BVH headers' 120 fps."""
+    m = opt_load(manifest_path) if manifest_path else None
+    takes = (m or {}).get("takes") or []
+    if not takes:
+        return (f"The manifest of {what} records no source rates (`takes`): check that it was "
+                "built with `--source-fps ../shared/data/cmu-salsa=60`.")
+    by = {}
+    for t in takes:
+        by.setdefault(t.get("genre", "?"), set()).add((t.get("source_fps"), t.get("rate_from")))
+    parts = [f"{g} " + " and ".join(f"{r:g} fps ({frm})" for r, frm in sorted(v, key=str))
+             for g, v in sorted(by.items())]
+    note = (f"Rates {what} read its takes at (its manifest's `takes`; `given` = "
+            "`dataset build --source-fps`, `header` = the file's own): " + "; ".join(parts) +
+            "; every clip then resampled to 30 fps.")
+    bad = [t for t in takes if t.get("genre") == "salsa" and t.get("source_fps") != 60]
+    if bad:
+        rates = ", ".join(sorted({f"{t.get('source_fps')}" for t in bad}))
+        note += (f" **Warning: {len(bad)} salsa takes were read at {rates} fps, not 60: their "
+                 "real rows move too fast. Rebuild the data set with "
+                 "`--source-fps ../shared/data/cmu-salsa=60`.**")
+    return note
+
+
+def physical_note(w, rates, sets=""):
+    """The paragraph under the physical table: what each column means, how sets and seeds are
+    combined (`sets`: a sentence on this report's rows), at which rate the real motion is read
+    (`rates`: e.g. rates_note())."""
+    w("Figures of `dancegen eval --metrics physical` (definitions and thresholds in "
+      "`crates/dancegen-metrics/src/physical.rs`) on world joints (metres, Y-up, floor at "
+      "y = 0) at 30 fps. **floor_median**: median height of the lowest foot joint (ankles, "
+      "toes) above the floor: 0 stands on it, > 0 hovers, < 0 sinks. **float**: share of frames "
+      "in which no foot joint is within 5 cm of the floor. **foot_slide**: median horizontal "
+      "speed of a foot joint while it touches the floor (ankle under 8 cm, toe under 5 cm); "
+      "planted feet give 0. **jerk** / **jerk_p99**: mean and 99th percentile of the jerk "
+      "(third time derivative of position) over joints and frames: jitter and pose jumps raise "
+      "them. **max_step**: the largest single-frame move of any joint. **spikes**: frame steps "
+      "in which some joint moves faster than 20 m/s (teleports, not movement). **leg_cross**: "
+      "share of frames with crossed shins. **joint_speed**: mean joint speed. "
+      "**pelvis_speed**: mean horizontal pelvis speed (travel over the floor). **step_rate**: "
+      "foot steps of both feet per second (real salsa: 1.6–2.3). A set's value is the mean over "
+      "its clips, except max_step (the largest of its clips) and spikes (their sum, so it grows "
+      f"with the number of clips). {sets} The real motion is read at its true frame rate: the "
+      "CMU salsa at 60 fps, not the 120 fps its BVH headers state (docs/data-rates.md; at the "
+      f"header's rate it would move and step twice as fast). {rates}".replace("  ", " ").rstrip())
+    w("")
+
+
+# ----------------------------------------------------------------------------- contact sheet
+# tools/contact_sheet.sh, and the report's section showing it; shared like the figures above.
+
+CONTACT_FPS = 30  # the joints .npy files of every evaluation
+
+
+def npy_shape(path):
+    with open(path, "rb") as f:
+        if f.read(6) != b"\x93NUMPY":
+            raise SystemExit(f"{path}: not an .npy file")
+        major = f.read(2)[0]
+        hlen = struct.unpack("<H" if major == 1 else "<I", f.read(2 if major == 1 else 4))[0]
+        return tuple(ast.literal_eval(f.read(hlen).decode("latin1"))["shape"])
+
+
+def make_contact_sheet(binary, png, info, caption, rows, work, python=None):
+    """Draws rows [(label, [joints .npy, ...])] (several files: one picture) at three moments,
+    on whole seconds near 1/6, 1/2 and 5/6 of the shortest motion, with tools/contact_sheet.sh
+    into `png`, and describes the sheet in `info` (JSON) for contact_section(). `info` is
+    removed first and written only when the sheet was made, so a failed sheet leaves the report
+    without a picture, never with an old one. Returns whether it was made."""
+    import subprocess
+
+    if os.path.exists(info):
+        os.remove(info)
+    frames_of = min(npy_shape(f)[0] for _, files in rows for f in files)
+    secs = frames_of / CONTACT_FPS
+    frames = [min(int(secs * k / 6 + 0.5) * CONTACT_FPS, frames_of - 1) for k in (1, 3, 5)]
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "contact_sheet.sh")
+    env = dict(os.environ, DANCEGEN=binary, WORK=work, FPS=str(CONTACT_FPS),
+               PYTHON=python or sys.executable)
+    specs = [f"{label}={'+'.join(files)}" for label, files in rows]
+    r = subprocess.run(["bash", script, png, " ".join(map(str, frames))] + specs, env=env)
+    if r.returncode != 0:
+        print(f"contact sheet failed (exit {r.returncode}); the report has none", file=sys.stderr)
+        return False
+    with open(info, "w") as f:
+        json.dump({"image": os.path.abspath(png), "caption": caption, "fps": CONTACT_FPS,
+                   "frames": frames, "rows": [label for label, _ in rows],
+                   "files": [files for _, files in rows]}, f, indent=1)
+    return True
+
+
+def cmd_contact(args):
+    rows = []
+    for spec in args.rows:
+        label, _, files = spec.partition("=")
+        if not files:
+            sys.exit(f"{spec}: expected LABEL=FILE[+FILE...]")
+        rows.append((label, files.split("+")))
+    if not make_contact_sheet(args.bin, args.png, args.info, args.caption, rows, args.work):
+        sys.exit(1)
+
+
+def contact_section(w, info_path, report, heading="## Contact sheet"):
+    """The report's contact sheet (made by make_contact_sheet), if there is one: the picture
+    (linked relative to the report) and a caption of what it shows."""
+    info = opt_load(info_path)
+    if info is None or not os.path.exists(info["image"]):
+        return
+    rel = os.path.relpath(info["image"], os.path.dirname(os.path.abspath(report)))
+    fps = info["fps"]
+    secs = ", ".join(f"{f / fps:g}" for f in info["frames"])
+    w(heading)
+    w("")
+    w(f"![{info['caption']}]({rel})")
+    w("")
+    w(f"{info['caption']}. Rows, top to bottom: {'; '.join(info['rows'])}. Columns: {secs} s "
+      f"into the clip (frames {', '.join(map(str, info['frames']))} at {fps:g} fps), the same "
+      "moments in every row. Drawn from the joints `dancegen eval` measured, as stick figures "
+      "(`tools/contact_sheet.sh`, `dancegen render`); the shadow marks the floor under the "
+      "dancer, so feet drawn above their shadow float.")
+    w("")
 
 
 def cmd_report(args):
@@ -530,6 +729,37 @@ def cmd_report(args):
           "is one sample, and the real held-out motion comes as 16–20 s clips.")
         w("")
 
+    # ---- physical plausibility (+ the contact sheet)
+    def phys_gen(run_out, name, seed_list, fname):
+        return physical_over([os.path.join(run_out, "eval", name, f"seed{x}", fname)
+                              for x in seed_list])
+
+    w("## Physical plausibility")
+    w("")
+    prow = [(f"real data (the {len(clips)} held-out clips)",
+             physical_over([os.path.join(ev, "real", "physical.json")])),
+            (f"real data (the {n_train} training clips)",
+             physical_over([os.path.join(ev, "real", "physical_train.json")]))]
+    same = genre_clips(meta.get("manifest_abs"), {meta["genre"]}) - set(clips)
+    all_train = {os.path.splitext(f)[0] for f in os.listdir(os.path.join(out, "gt_train"))}
+    if same & all_train and same & all_train != all_train:
+        prow.append((f"real data (the {len(same & all_train)} {meta['genre']} training clips, "
+                     "the genre asked for)",
+                     physical_subset(os.path.join(ev, "real", "physical_train.json"), same)))
+    prow += [(f"segments: {label_of(name, label)}",
+              phys_gen(out, name, done[name], "physical.json")) for name, label, _, _ in configs]
+    if args.long:
+        prow += [(f"whole song: {label_of(name, label)}",
+                  phys_gen(out, name, done[name], "physical_long.json"))
+                 for name, label, _, _ in configs]
+    physical_table(w, prow)
+    physical_note(w, rates_note(meta.get("manifest_abs")),
+                  f"Segments: the {len(clips)} held-out cuts per seed (`dancegen eval --pred DIR "
+                  "--protocol none --fps 30 --metrics physical`)"
+                  + (", whole song: the one dance per seed" if args.long else "")
+                  + "; generated rows are mean ± standard deviation over the seeds.")
+    contact_section(w, os.path.join(out, "contact.json"), args.report, "### Contact sheet")
+
     # ---- targets (computed)
     def verdict(ok):
         return "n/a" if ok is None else ("✅ met" if ok else "❌ not met")
@@ -599,6 +829,16 @@ def cmd_report(args):
         after.update({k + "_all": stats(v)[:2] for k, v in setm_all["full"].items()})
         rows_ba.append(("after: this run's model", after))
         table(cols, rows_ba)
+        w("Physical plausibility of the same segments (see \"Physical plausibility\" above; "
+          "\"-\": that run did not measure the figures):")
+        w("")
+        prow = [(f"real data (the {len(clips)} held-out clips)",
+                 physical_over([os.path.join(ev, "real", "physical.json")]))]
+        prow += [(f"before: {label}", phys_gen(b_out, "full", b_done, "physical.json"))
+                 for b_out, label, _, _, b_done in bases]
+        prow.append(("after: this run's model", phys_gen(out, "full", done["full"],
+                                                         "physical.json")))
+        physical_table(w, prow)
         w("Issue 16's targets: BAS ≥ 0.35, Div_k ≥ 4.5, FID_k (all real) ≤ 92; boundary jerk "
           "< 1.5 and FSR ≤ real.")
         w("")
@@ -735,6 +975,14 @@ def main():
     p.add_argument("model")
     p.add_argument("--genre", default="salsa")
     p.set_defaults(func=cmd_model)
+    p = sub.add_parser("contact", help="the report's contact sheet (tools/contact_sheet.sh)")
+    p.add_argument("--bin", required=True, help="dancegen binary")
+    p.add_argument("--png", required=True)
+    p.add_argument("--info", required=True, help="JSON describing the sheet for the report")
+    p.add_argument("--caption", required=True, help="what the sheet shows (model, song, clip)")
+    p.add_argument("--work", required=True, help="directory for the single pictures")
+    p.add_argument("rows", nargs="+", metavar="LABEL=FILE[+FILE...]")
+    p.set_defaults(func=cmd_contact)
     p = sub.add_parser("report")
     p.add_argument("--out", required=True)
     p.add_argument("--seeds", required=True)

@@ -22,9 +22,17 @@
 #                        a before/after table of the two full systems; BASELINE_LABEL names it;
 #                        BASELINE2 / BASELINE2_LABEL add a second, later one
 #   FRESH=1              regenerate everything (otherwise outputs of the same model are reused)
+#   CONTACT=1            draw the contact sheet (tools/contact_sheet.sh): the first seed's full
+#                        system and the real motion of the first held-out clip, at the same
+#                        moments, to images/solo-eval-contact.png beside the report (default: 1,
+#                        0 in a dry run)
+#   CONTACT_CLIP=60_13_scaled  the held-out clip of the contact sheet (default: the first)
+#
+# Every motion also gets the physical plausibility figures (`dancegen eval --metrics physical`).
 #
 # --dry-run: no model; each "generated" clip is the held-out real motion, shifted per seed (tests
-# the plumbing). Writes to $OUT/dry-run/ and never to docs/.
+# the plumbing). Writes to $OUT/dry-run/ and never to docs/ (CONTACT=1: its sheet to
+# $OUT/dry-run/images/).
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -47,6 +55,8 @@ if [ "$DRY" = 1 ]; then
     OUT=$OUT/dry-run
     REPORT=$OUT/solo-eval.md
 fi
+CONTACT=${CONTACT:-$((1 - DRY))}
+CONTACT_PNG=$(dirname "$REPORT")/images/solo-eval-contact.png
 HELP="$PYTHON $ROOT/tools/solo_eval.py"
 T0=$(date +%s)
 LOAD_NOTE=$(load_note)
@@ -185,7 +195,12 @@ eval_set() { # pred gt out.json
     "${EV[@]}" --pred "$1" --gt "$2" --protocol finedance-lodge \
         --metrics fid_k,fid_g,div_k,div_g --json "$3" >/dev/null
 }
+eval_physical() { # pred (a file or directory) out.json: the physical plausibility figures
+    "${EV[@]}" --pred "$1" --protocol none --fps 30 --metrics physical --json "$2" >/dev/null
+}
 eval_clips "$OUT/gt" "$OUT/eval/real/clip.json"
+eval_physical "$OUT/gt" "$OUT/eval/real/physical.json"
+eval_physical "$OUT/gt_train" "$OUT/eval/real/physical_train.json"
 eval_bas "$OUT/eval/real" "$OUT/gt"
 eval_set "$OUT/gt_train" "$OUT/gt" "$OUT/eval/real/fid_train.json"
 eval_set "$OUT/gt_train" "$OUT/gt_all" "$OUT/eval/real/fid_train_all.json"
@@ -205,15 +220,44 @@ for cfg in $CONFIGS; do
         eval_set "$d/seg" "$OUT/gt" "$e/fid.json"
         eval_set "$d/seg" "$OUT/gt_all" "$e/fid_all.json"
         eval_clips "$d/seg" "$e/clip.json"
+        eval_physical "$d/seg" "$e/physical.json"
         eval_bas "$e" "$d/seg"
         if [ "$LONG" = 1 ] && [ -f "$d/long/song.npy" ]; then
             "${EV[@]}" --pred "$d/long/song.npy" --protocol none --fps 30 \
                 --metrics "bas,$CLIP_METRICS" --bas-variant bailando \
                 --beats "$OUT/beats/song.npy" --json "$e/long.json" >/dev/null
+            eval_physical "$d/long/song.npy" "$e/physical_long.json"
         fi
     done
     log "evaluated $cfg"
 done
+
+# ---- contact sheet: the first seed's full system and the real motion of the first held-out
+# clip, at the same moments (not in a dry run unless CONTACT=1: there "generated" is real)
+if [ "$CONTACT" = 1 ]; then
+    if [ -n "${CONTACT_CLIP:-}" ]; then
+        read -r stem start end _ < <(awk -v c="$CONTACT_CLIP" '$1 == c' "$OUT/clips.txt")
+    else
+        read -r stem start end _ < "$OUT/clips.txt"
+    fi
+    read -r seed _ <<< "$SEEDS"
+    g=$OUT/gen/full/seed$seed/seg/$stem.npy
+    if [ -f "$g" ]; then
+        span=$(awk -v a="$start" -v b="$end" 'BEGIN{printf "%.1f–%.1f s", a, b}')
+        caption="$MODEL_NAME (\`$(basename "$MODEL")\`, full system, seed $seed)"
+        [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real clip standing in for generated motion"
+        caption="$caption and the real held-out clip \`$stem\`, on $(basename "$SONG") $span"
+        $HELP contact --bin "$BIN" --png "$CONTACT_PNG" --info "$OUT/contact.json" \
+            --work "$OUT/contact" --caption "$caption" \
+            "generated (full, seed $seed)=$g" "real $stem=$OUT/gt/$stem.npy" \
+            || log "contact sheet failed; the report has none"
+    else
+        rm -f "$OUT/contact.json"
+        log "no contact sheet: $g was not generated"
+    fi
+else
+    rm -f "$OUT/contact.json"
+fi
 
 # ---- report
 WALL=$(( $(date +%s) - T0 ))
