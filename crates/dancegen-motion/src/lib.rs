@@ -26,6 +26,7 @@ pub mod pickle;
 pub mod repr;
 pub mod retarget;
 pub mod rig;
+pub mod rigid_fit;
 pub mod rng;
 pub mod rotation;
 pub mod scene_input;

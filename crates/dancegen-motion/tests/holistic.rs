@@ -329,3 +329,48 @@ fn souldance_split_npy_reads_as_holistic_motion() {
     let e = split::read_split_npy(&bad, 30.0).unwrap_err().to_string();
     assert!(e.contains("bad.npy") && e.contains("[2, 263]"), "{e}");
 }
+
+/// A generated frame is not consistent data: a belly or hip joint a few centimetres off must
+/// not turn the decoded body around. The root rotation is fitted on the whole body, so it moves
+/// by a few degrees, as the joints did; a frame built from the hips and belly alone turned by
+/// up to 3 rad on SoulNet's output (issue 41).
+#[test]
+fn holistic623_root_rotation_survives_a_displaced_belly() {
+    let (_, poses, trans) = synthetic();
+    let parts = Holistic623::encode(&poses, &trans, 30.0).unwrap();
+    let clean = Holistic623::decode(&parts, 30.0).unwrap();
+    let mut noisy = parts.clone();
+    let dims = Holistic623::DIMS;
+    let frames = noisy.len() / dims;
+    // Joint 3 (belly, 10 cm above the pelvis) pushed 8 cm sideways and joint 1 (left hip) 4 cm
+    // back, in every frame: the short vectors the root frame used to be built from.
+    for f in 0..frames {
+        let ric = f * dims + LAYOUT.ric();
+        noisy[ric + 2 * 3] += 0.08;
+        noisy[ric + 2] -= 0.04;
+    }
+    let moved = Holistic623::decode(&noisy, 30.0).unwrap();
+    let mut worst = 0.0f64;
+    for f in 0..frames {
+        let aa = |p: &[f32]| {
+            Mat3::from_axis_angle(
+                [
+                    p[f * JOINTS * 3],
+                    p[f * JOINTS * 3 + 1],
+                    p[f * JOINTS * 3 + 2],
+                ]
+                .map(f64::from),
+            )
+        };
+        let d = aa(&clean.poses)
+            .transpose()
+            .mul(&aa(&moved.poses))
+            .to_axis_angle();
+        worst = worst.max(norm(d));
+    }
+    eprintln!("{SEQ}: root rotation moved by at most {worst:.3} rad");
+    assert!(
+        worst < 0.25,
+        "the root turned by {worst:.3} rad for 8 cm of belly noise"
+    );
+}

@@ -35,8 +35,9 @@
 
 use super::motion::{POSE_DIMS, SMPL_JOINTS};
 use super::{ReprError, SmplMotion, frames_of};
+use crate::rigid_fit::best_fit_rotation;
 use crate::rotation::{Mat3, Quat};
-use crate::skeleton::SMPL24_OFFSETS;
+use crate::skeleton::{SMPL24_OFFSETS, SMPL24_PARENTS};
 
 /// Body joints of the representation (SMPL 0–21).
 pub const JOINTS: usize = 22;
@@ -328,9 +329,16 @@ pub(crate) fn decode_ric_joints(
 }
 
 /// Local rotations and root translation from the generalised layout: `decoded` is the output
-/// of [`decode_ric_joints`] on `data`, `offsets` the skeleton's rest offsets (only joints 1–3
-/// are used, to solve the root rotation from the decoded pelvis, hips and belly). Returns
-/// `(axis-angle (T', J, 3), trans (T', 3))`.
+/// of [`decode_ric_joints`] on `data`, `offsets` the skeleton's rest offsets. Joints 1–21 take
+/// their rotations from the 6D block; the root rotation is the one that best carries the body
+/// so posed (forward kinematics from the root, joints 1–21) onto the decoded joint positions
+/// relative to the pelvis ([`best_fit_rotation`]). Returns `(axis-angle (T', J, 3), trans (T', 3))`.
+///
+/// Why a fit over the body and not the pelvis frame alone: the frame spanned by the hips and
+/// the belly (joints 1–3, 6-12 cm from the pelvis) is exact for consistent data but flips
+/// when a generated frame swings one of those short vectors. That turned whole SoulNet bodies
+/// around for a frame or two (a hand moving 1.4 m between two frames on the demo song, issue
+/// 41). The fit is equally exact for consistent data and leans on all 21 body joints.
 pub(crate) fn decode_ric_rotations(
     data: &[f32],
     decoded: &[f32],
@@ -340,37 +348,41 @@ pub(crate) fn decode_ric_rotations(
     let layout = RicLayout { joints };
     let dims = layout.dims();
     let t = decoded.len() / (joints * 3);
-    let rest = frame_basis(sub(offsets[1], offsets[2]), offsets[3]);
     let mut poses = Vec::with_capacity(t * joints * 3);
     let mut trans = Vec::with_capacity(t * 3);
+    let mut local = vec![Mat3::IDENTITY; joints];
+    let mut global = vec![Mat3::IDENTITY; BODY_FIT_JOINTS];
+    let mut posed = vec![[0.0f64; 3]; BODY_FIT_JOINTS];
+    let mut target = vec![[0.0f64; 3]; BODY_FIT_JOINTS];
     for f in 0..t {
         let j = |k: usize| {
             let o = (f * joints + k) * 3;
             [decoded[o], decoded[o + 1], decoded[o + 2]].map(f64::from)
         };
-        let posed = frame_basis(sub(j(1), j(2)), sub(j(3), j(0)));
-        let root = posed.mul(&rest.transpose());
-        trans.extend(j(0).map(|v| v as f32));
-        poses.extend(root.to_axis_angle().map(|v| v as f32));
         let row = &data[f * dims..(f + 1) * dims];
-        for d in row[layout.rot()..layout.vel()].chunks_exact(6) {
+        for (k, d) in row[layout.rot()..layout.vel()].chunks_exact(6).enumerate() {
             let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
-            poses.extend(
-                Mat3::from_6d(&d)
-                    .transpose()
-                    .to_axis_angle()
-                    .map(|v| v as f32),
-            );
+            local[k + 1] = Mat3::from_6d(&d).transpose();
+        }
+        // The body posed by its local rotations with the root unrotated at the origin.
+        let root_pos = j(0);
+        for k in 1..BODY_FIT_JOINTS {
+            let parent = SMPL24_PARENTS[k] as usize;
+            let o = global[parent].mul_vec(offsets[k]);
+            posed[k] = std::array::from_fn(|a| posed[parent][a] + o[a]);
+            global[k] = global[parent].mul(&local[k]);
+            target[k] = sub(j(k), root_pos);
+        }
+        let root = best_fit_rotation(&posed[1..], &target[1..], None);
+        trans.extend(root_pos.map(|v| v as f32));
+        poses.extend(root.to_axis_angle().map(|v| v as f32));
+        for m in &local[1..] {
+            poses.extend(m.to_axis_angle().map(|v| v as f32));
         }
     }
     (poses, trans)
 }
 
-/// Orthonormal basis (as matrix columns) from two non-parallel vectors, Gram-Schmidt.
-fn frame_basis(a: V3, b: V3) -> Mat3 {
-    let e1 = normalize(a);
-    let d = e1[0] * b[0] + e1[1] * b[1] + e1[2] * b[2];
-    let e2 = normalize([b[0] - d * e1[0], b[1] - d * e1[1], b[2] - d * e1[2]]);
-    let e3 = cross(e1, e2);
-    Mat3([e1, e2, e3]).transpose()
-}
+/// Joints 0-21, the SMPL body every layout of this module starts with: the root rotation is
+/// fitted on them ([`decode_ric_rotations`]).
+const BODY_FIT_JOINTS: usize = 22;
