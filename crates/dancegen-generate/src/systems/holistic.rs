@@ -8,7 +8,6 @@ use std::path::{Path, PathBuf};
 
 use dancegen_lodgepp::planted_feet::clean_planted_feet;
 use dancegen_motion::face::{FaceWeights, flame::FlameMapping};
-use dancegen_motion::repr::motion::GroundMode;
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_motion::skeleton::Skeleton;
 use dancegen_nn::burn::tensor::Device;
@@ -131,8 +130,8 @@ impl DanceSystem for Holistic {
             }
             notes.push("planted feet locked (post-processing, not part of SoulNet)".into());
         }
-        body.put_on_ground_with(GroundMode::SupportFeet)
-            .map_err(|e| gen_err(&e))?;
+        // The planted feet on the floor frame by frame, as for the solo (systems::solo::to_smpl).
+        body.put_feet_on_tracked_floor().map_err(|e| gen_err(&e))?;
         keep_feet_above_floor(&mut body).map_err(GenerateError::Generation)?;
         hol.trans.clone_from(&body.trans);
         let face_values = decoded.face[..t * dancegen_motion::face::ARKIT_COUNT].to_vec();

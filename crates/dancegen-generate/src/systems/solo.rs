@@ -8,7 +8,7 @@ use std::path::Path;
 use dancegen_lodgepp::bundle::SoloModel;
 use dancegen_lodgepp::choreo_gpt::CHOREOGRAPHY;
 use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
-use dancegen_motion::repr::motion::{FOOT_JOINTS, GroundMode};
+use dancegen_motion::repr::motion::FOOT_JOINTS;
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
@@ -196,8 +196,10 @@ fn generate_options(
     opts
 }
 
-/// Raw EDGE-151 frames → SMPL motion standing on the floor: the supporting foot at y = 0 and
-/// no frame with a foot below it.
+/// Raw EDGE-151 frames → SMPL motion standing on the floor: the planted feet at y = 0, frame
+/// by frame ([`SmplMotion::put_feet_on_tracked_floor`]: a long generated dance's root height
+/// drifts against its legs, and one floor for the whole dance left its feet 0.2 m up in most
+/// of some), and no frame with a foot below it.
 fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
     if frames.iter().any(|v| !v.is_finite()) {
         return Err(GenerateError::Generation(
@@ -207,8 +209,7 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
     }
     let motion_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
     let mut m = Edge151::decode(frames).map_err(|e| motion_err(&e))?;
-    m.put_on_ground_with(GroundMode::SupportFeet)
-        .map_err(|e| motion_err(&e))?;
+    m.put_feet_on_tracked_floor().map_err(|e| motion_err(&e))?;
     keep_feet_above_floor(&mut m).map_err(GenerateError::Generation)?;
     Ok(m)
 }

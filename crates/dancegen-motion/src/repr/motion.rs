@@ -17,6 +17,7 @@ use crate::aistpp::AistppMotion;
 use crate::fk::fk_axis_angle_f32;
 use crate::rotation::Quat;
 use crate::skeleton::{SMPL24_MIRROR, Skeleton};
+use crate::smoothing::{Ends, gaussian_smooth};
 
 /// Number of SMPL joints in [`SmplMotion`].
 pub const SMPL_JOINTS: usize = 24;
@@ -106,6 +107,60 @@ pub fn planted_floor_height(joints: &[f32], fps: f32) -> Option<f32> {
     } else {
         0.5 * (planted[n / 2 - 1] + planted[n / 2])
     })
+}
+
+/// Gaussian σ (seconds) over which [`planted_floor_track`] lets the floor under a generated
+/// dance change. Real captures stand on one floor; a generated long dance can raise or lower
+/// its root against its legs from one stretch to the next (lodgepp-small on feelings.ogg
+/// 60-90 s: the pelvis 0.73 m above the floor with the feet on it in one stretch, 1.08 m with
+/// the feet 0.2 m up in another, the legs equally bent), and one floor for the whole clip then
+/// leaves the feet hanging in most of it. Half a second is longer than a step's contact and
+/// shorter than those stretches; jumps do not move it, as their frames have no planted foot.
+pub const FLOOR_TRACK_SECONDS: f64 = 0.5;
+
+/// The floor under a dancer frame by frame, from world joints `(T, 24, 3)` at `fps`: the
+/// height of the planted lowest foot joint (the frames [`planted_floor_height`] uses), averaged
+/// over a Gaussian window of [`FLOOR_TRACK_SECONDS`] around each frame (a frame with no
+/// planted frame within three σ takes the whole clip's planted median). `None` when fewer than
+/// [`MIN_PLANTED_SHARE`] of the frames have a planted lowest foot joint.
+///
+/// For generated dances, whose root height can drift against their legs. For real takes it
+/// follows their one floor to within capture noise, so they are put on the floor with
+/// [`SmplMotion::put_feet_on_floor`].
+pub fn planted_floor_track(joints: &[f32], fps: f32) -> Option<Vec<f32>> {
+    let t = joints.len() / (SMPL_JOINTS * 3);
+    let whole = planted_floor_height(joints, fps)?;
+    let at = |f: usize, j: usize| -> [f32; 3] {
+        let i = (f * SMPL_JOINTS + j) * 3;
+        [joints[i], joints[i + 1], joints[i + 2]]
+    };
+    let step = PLANTED_SPEED_MS / fps;
+    // (height, 1) where the lowest foot joint is planted, (0, 0) elsewhere.
+    let mut height = vec![0.0f64; t];
+    let mut weight = vec![0.0f64; t];
+    for f in 0..t - 1 {
+        let Some(j) = FOOT_JOINTS
+            .into_iter()
+            .min_by(|&a, &b| at(f, a)[1].total_cmp(&at(f, b)[1]))
+        else {
+            continue;
+        };
+        let (p, q) = (at(f, j), at(f + 1, j));
+        let d = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
+        if d < step {
+            height[f] = f64::from(p[1]);
+            weight[f] = 1.0;
+        }
+    }
+    let sigma = FLOOR_TRACK_SECONDS * f64::from(fps);
+    let num = gaussian_smooth(&height, sigma, Ends::Renormalise);
+    let den = gaussian_smooth(&weight, sigma, Ends::Renormalise);
+    Some(
+        num.iter()
+            .zip(&den)
+            .map(|(n, d)| if *d > 1e-3 { (n / d) as f32 } else { whole })
+            .collect(),
+    )
 }
 
 /// SMPL 24 motion, see the module documentation for the exact layout.
@@ -350,6 +405,24 @@ impl SmplMotion {
             p[1] -= h;
         }
         Ok(h)
+    }
+
+    /// Shifts the root vertically, frame by frame, so the floor the dancer's planted feet
+    /// stand on ([`planted_floor_track`]) is y = 0: for generated dances, whose root height can
+    /// drift against their legs. A motion with too few planted frames gets one shift,
+    /// [`GroundMode::SupportFeet`]. Returns the largest and smallest shift subtracted.
+    pub fn put_feet_on_tracked_floor(&mut self) -> Result<(f32, f32), ReprError> {
+        let joints = self.joints_world()?;
+        let track = planted_floor_track(&joints, self.fps).unwrap_or_else(|| {
+            vec![Self::ground_height(&joints, GroundMode::SupportFeet); self.frames()]
+        });
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (p, h) in self.trans.chunks_exact_mut(3).zip(&track) {
+            p[1] -= h;
+            lo = lo.min(*h);
+            hi = hi.max(*h);
+        }
+        Ok((hi, lo))
     }
 
     /// EDGE velocity contacts `(T, 4)` in [`FOOT_JOINTS`] order (anchors.md C.2): 1 where the
