@@ -11,14 +11,15 @@
 //!    places the follower from a learned relative position, and at partner distance its
 //!    centimetre errors put trunks through each other (docs/duet-eval.md measures both).
 //!
-//! Heights are relative to the leader's floor (its support-foot height,
-//! [`GroundMode::SupportFeet`]): the model was trained on couples standing on y = 0, and a
-//! leader recorded with another floor height gets a follower on its own floor.
+//! Heights are relative to the leader's floor (where its planted feet rest,
+//! [`planted_floor_height`], as the training couples were grounded): the model was trained on
+//! couples standing on y = 0, and a leader recorded with another floor height gets a follower on
+//! its own floor.
 
 use std::time::Instant;
 
 use dancegen_motion::couple_separation::{SeparationConfig, separation_offsets};
-use dancegen_motion::repr::motion::GroundMode;
+use dancegen_motion::repr::motion::{GroundMode, planted_floor_height};
 use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::diffusion::{BetaSchedule, Schedule};
@@ -131,10 +132,13 @@ pub fn generate_follower_hooked(
     let f = ae.frames_per_token();
     let k = t.div_ceil(f);
     let frames = k * f;
-    let floor = SmplMotion::ground_height(
-        &leader.joints_world().map_err(|e| e.to_string())?,
-        GroundMode::SupportFeet,
-    );
+    // The floor the training couples were put on (`SmplMotion::put_feet_on_floor`: where the
+    // planted feet rest), so the model sees the leader as it saw the real ones. The 10th
+    // percentile used before sits 0.6-3.1 cm under the resting feet of the real salsa leaders,
+    // which lifted every leader by that much and sank its follower by as much.
+    let leader_joints = leader.joints_world().map_err(|e| e.to_string())?;
+    let floor = planted_floor_height(&leader_joints, leader.fps)
+        .unwrap_or_else(|| SmplMotion::ground_height(&leader_joints, GroundMode::SupportFeet));
     let mut grounded = leader.clone();
     for p in grounded.trans.chunks_exact_mut(3) {
         p[1] -= floor;
