@@ -78,25 +78,9 @@ pub const MIN_PLANTED_SHARE: f32 = 0.1;
 /// true 60 fps the planted median is 0.6-3.1 cm (median 1.7 cm) above the 10th percentile, so
 /// grounding at the 10th percentile leaves the resting feet that far above the floor.
 pub fn planted_floor_height(joints: &[f32], fps: f32) -> Option<f32> {
-    let t = joints.len() / (SMPL_JOINTS * 3);
-    if t < 2 || !(fps.is_finite() && fps > 0.0) {
-        return None;
-    }
-    let at = |f: usize, j: usize| -> [f32; 3] {
-        let i = (f * SMPL_JOINTS + j) * 3;
-        [joints[i], joints[i + 1], joints[i + 2]]
-    };
-    let step = PLANTED_SPEED_MS / fps;
-    let mut planted: Vec<f32> = (0..t - 1)
-        .filter_map(|f| {
-            let j = FOOT_JOINTS
-                .into_iter()
-                .min_by(|&a, &b| at(f, a)[1].total_cmp(&at(f, b)[1]))?;
-            let (p, q) = (at(f, j), at(f + 1, j));
-            let d = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
-            (d < step).then_some(p[1])
-        })
-        .collect();
+    let per_frame = planted_lowest_foot(joints, fps)?;
+    let t = per_frame.len() + 1;
+    let mut planted: Vec<f32> = per_frame.into_iter().flatten().collect();
     if (planted.len() as f32) < MIN_PLANTED_SHARE * t as f32 {
         return None;
     }
@@ -107,6 +91,35 @@ pub fn planted_floor_height(joints: &[f32], fps: f32) -> Option<f32> {
     } else {
         0.5 * (planted[n / 2 - 1] + planted[n / 2])
     })
+}
+
+/// For frames `0..T − 1` of world joints `(T, 24, 3)` at `fps`: the height of the lowest foot
+/// joint (7, 8, 10, 11) where it is planted (moves slower than [`PLANTED_SPEED_MS`] to the next
+/// frame), `None` where it moves. `None` for fewer than 2 frames or an unusable rate. The one
+/// definition of a planted frame behind [`planted_floor_height`] and [`planted_floor_track`].
+fn planted_lowest_foot(joints: &[f32], fps: f32) -> Option<Vec<Option<f32>>> {
+    let t = joints.len() / (SMPL_JOINTS * 3);
+    if t < 2 || !(fps.is_finite() && fps > 0.0) {
+        return None;
+    }
+    let at = |f: usize, j: usize| -> [f32; 3] {
+        let i = (f * SMPL_JOINTS + j) * 3;
+        [joints[i], joints[i + 1], joints[i + 2]]
+    };
+    let step = PLANTED_SPEED_MS / fps;
+    Some(
+        (0..t - 1)
+            .map(|f| {
+                let j = FOOT_JOINTS
+                    .into_iter()
+                    .min_by(|&a, &b| at(f, a)[1].total_cmp(&at(f, b)[1]))?;
+                let (p, q) = (at(f, j), at(f + 1, j));
+                let d =
+                    ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
+                (d < step).then_some(p[1])
+            })
+            .collect(),
+    )
 }
 
 /// Gaussian σ (seconds) over which [`planted_floor_track`] lets the floor under a generated
@@ -128,27 +141,15 @@ pub const FLOOR_TRACK_SECONDS: f64 = 0.5;
 /// follows their one floor to within capture noise, so they are put on the floor with
 /// [`SmplMotion::put_feet_on_floor`].
 pub fn planted_floor_track(joints: &[f32], fps: f32) -> Option<Vec<f32>> {
-    let t = joints.len() / (SMPL_JOINTS * 3);
     let whole = planted_floor_height(joints, fps)?;
-    let at = |f: usize, j: usize| -> [f32; 3] {
-        let i = (f * SMPL_JOINTS + j) * 3;
-        [joints[i], joints[i + 1], joints[i + 2]]
-    };
-    let step = PLANTED_SPEED_MS / fps;
-    // (height, 1) where the lowest foot joint is planted, (0, 0) elsewhere.
-    let mut height = vec![0.0f64; t];
-    let mut weight = vec![0.0f64; t];
-    for f in 0..t - 1 {
-        let Some(j) = FOOT_JOINTS
-            .into_iter()
-            .min_by(|&a, &b| at(f, a)[1].total_cmp(&at(f, b)[1]))
-        else {
-            continue;
-        };
-        let (p, q) = (at(f, j), at(f + 1, j));
-        let d = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
-        if d < step {
-            height[f] = f64::from(p[1]);
+    let per_frame = planted_lowest_foot(joints, fps)?;
+    // (height, 1) where the lowest foot joint is planted, (0, 0) elsewhere; the last frame has
+    // no next frame to tell.
+    let mut height = vec![0.0f64; per_frame.len() + 1];
+    let mut weight = vec![0.0f64; per_frame.len() + 1];
+    for (f, h) in per_frame.iter().enumerate() {
+        if let Some(h) = h {
+            height[f] = f64::from(*h);
             weight[f] = 1.0;
         }
     }
