@@ -45,3 +45,26 @@ convert_real_clips() {
         ln -f "$out/gt_train/$stem.npy" "$out/gt_all/$stem.npy"
     done
 }
+
+# The contact sheet of one generated clip beside the real held-out clip it stands for
+# ($OUT/gt/STEM.npy), drawn by tools/solo_eval.py's `contact` (tools/contact_sheet.sh) into
+# $CONTACT_PNG with its description in $OUT/contact.json. Uses BIN, PYTHON, ROOT, OUT, SONG,
+# DRY and the caller's log(). Arguments: the generated .npy, its row label, what it is (the
+# caption's start), STEM, and the clip's start and end in the song (s). Without the generated
+# file, or when drawing fails, there is no $OUT/contact.json and the report shows no sheet.
+contact_sheet_clip() {
+    local gen=$1 label=$2 what=$3 stem=$4 start=$5 end=$6 span caption
+    rm -f "$OUT/contact.json"
+    if [ ! -f "$gen" ]; then
+        log "no contact sheet: $gen was not generated"
+        return 0
+    fi
+    span=$(awk -v a="$start" -v b="$end" 'BEGIN{printf "%.1f–%.1f s", a, b}')
+    caption=$what
+    [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real motion standing in for generated motion"
+    caption="$caption and the real held-out clip \`$stem\`, on $(basename "$SONG") $span"
+    $PYTHON "$ROOT/tools/solo_eval.py" contact --bin "$BIN" --png "$CONTACT_PNG" \
+        --info "$OUT/contact.json" --work "$OUT/contact" --caption "$caption" \
+        "$label=$gen" "real $stem=$OUT/gt/$stem.npy" \
+        || log "contact sheet failed; the report has none"
+}

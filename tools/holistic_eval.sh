@@ -408,19 +408,9 @@ rm -f "$OUT/contact.json"
 if [ "$CONTACT" = 1 ]; then
     read -r stem start end _ < "$OUT/clips.txt"
     read -r seed _ <<< "$SEEDS"
-    g=$OUT/body/seed$seed/$stem.npy
-    if [ -f "$g" ]; then
-        span=$(awk -v a="$start" -v b="$end" 'BEGIN{printf "%.1f–%.1f s", a, b}')
-        caption="SoulNet \`$MODEL_NAME\` (\`$(basename "$MODEL")\`, seed $seed, its body as evaluated)"
-        [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real body standing in for generated motion"
-        caption="$caption and the real held-out clip \`$stem\`, on $(basename "$SONG") $span"
-        $SOLO_HELP contact --bin "$BIN" --png "$CONTACT_PNG" --info "$OUT/contact.json" \
-            --work "$OUT/contact" --caption "$caption" \
-            "generated (seed $seed)=$g" "real $stem=$OUT/gt/$stem.npy" \
-            || log "contact sheet failed; the report has none"
-    else
-        log "no contact sheet: $g was not generated"
-    fi
+    contact_sheet_clip "$OUT/body/seed$seed/$stem.npy" "generated (seed $seed)" \
+        "SoulNet \`$MODEL_NAME\` (\`$(basename "$MODEL")\`, seed $seed, its body as evaluated)" \
+        "$stem" "$start" "$end"
 fi
 
 # ---- report

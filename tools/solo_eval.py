@@ -56,14 +56,19 @@ CONFIG = {c[0]: c for c in CONFIGS}
 # ----------------------------------------------------------------------------- .npy
 
 
+def read_npy_header(f, path):
+    """The header dict of the .npy open as `f` (positioned at its start); `f` is left at the data."""
+    if f.read(6) != b"\x93NUMPY":
+        raise SystemExit(f"{path}: not an .npy file")
+    major = f.read(2)[0]
+    hlen = struct.unpack("<H" if major == 1 else "<I", f.read(2 if major == 1 else 4))[0]
+    return ast.literal_eval(f.read(hlen).decode("latin1"))
+
+
 def read_npy(path):
     """(shape, flat list of floats) of a little-endian .npy (f4, f8, i8, i4)."""
     with open(path, "rb") as f:
-        if f.read(6) != b"\x93NUMPY":
-            raise SystemExit(f"{path}: not an .npy file")
-        major = f.read(2)[0]
-        hlen = struct.unpack("<H" if major == 1 else "<I", f.read(2 if major == 1 else 4))[0]
-        header = ast.literal_eval(f.read(hlen).decode("latin1"))
+        header = read_npy_header(f, path)
         data = f.read()
     if header.get("fortran_order"):
         raise SystemExit(f"{path}: Fortran order not supported")
@@ -377,11 +382,7 @@ CONTACT_FPS = 30  # the joints .npy files of every evaluation
 
 def npy_shape(path):
     with open(path, "rb") as f:
-        if f.read(6) != b"\x93NUMPY":
-            raise SystemExit(f"{path}: not an .npy file")
-        major = f.read(2)[0]
-        hlen = struct.unpack("<H" if major == 1 else "<I", f.read(2 if major == 1 else 4))[0]
-        return tuple(ast.literal_eval(f.read(hlen).decode("latin1"))["shape"])
+        return tuple(read_npy_header(f, path)["shape"])
 
 
 def make_contact_sheet(binary, png, info, caption, rows, work, python=None):

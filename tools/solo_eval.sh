@@ -241,20 +241,8 @@ if [ "$CONTACT" = 1 ]; then
         read -r stem start end _ < "$OUT/clips.txt"
     fi
     read -r seed _ <<< "$SEEDS"
-    g=$OUT/gen/full/seed$seed/seg/$stem.npy
-    if [ -f "$g" ]; then
-        span=$(awk -v a="$start" -v b="$end" 'BEGIN{printf "%.1f–%.1f s", a, b}')
-        caption="$MODEL_NAME (\`$(basename "$MODEL")\`, full system, seed $seed)"
-        [ "$DRY" = 1 ] && caption="DRY RUN: the shifted real clip standing in for generated motion"
-        caption="$caption and the real held-out clip \`$stem\`, on $(basename "$SONG") $span"
-        $HELP contact --bin "$BIN" --png "$CONTACT_PNG" --info "$OUT/contact.json" \
-            --work "$OUT/contact" --caption "$caption" \
-            "generated (full, seed $seed)=$g" "real $stem=$OUT/gt/$stem.npy" \
-            || log "contact sheet failed; the report has none"
-    else
-        rm -f "$OUT/contact.json"
-        log "no contact sheet: $g was not generated"
-    fi
+    contact_sheet_clip "$OUT/gen/full/seed$seed/seg/$stem.npy" "generated (full, seed $seed)" \
+        "$MODEL_NAME (\`$(basename "$MODEL")\`, full system, seed $seed)" "$stem" "$start" "$end"
 else
     rm -f "$OUT/contact.json"
 fi
