@@ -21,6 +21,8 @@ def rel(j):
 
 
 def main():
+    if len(sys.argv) not in (2, 4) or not os.path.isdir(sys.argv[1]):
+        sys.exit(__doc__.split("\n\n")[1].strip() + "\n(OUT: a tools/duet_eval.sh output directory)")
     out = sys.argv[1]
     a, b = (sys.argv[2], sys.argv[3]) if len(sys.argv) > 3 else ("0", "1")
     diffs = []
