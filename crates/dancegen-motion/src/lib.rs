@@ -28,6 +28,7 @@ pub mod retarget;
 pub mod rig;
 pub mod rigid_fit;
 pub mod rng;
+pub mod rot6d_track;
 pub mod rotation;
 pub mod scene_input;
 pub mod skeleton;

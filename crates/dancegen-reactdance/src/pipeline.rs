@@ -39,6 +39,9 @@ pub struct Generated {
     /// Seconds spent sampling the latent and decoding it.
     pub sample_s: f64,
     pub decode_s: f64,
+    /// Joint rotations (over joints and frames) whose generated 6D rows had lost their length
+    /// and were bridged between their neighbours (`dancegen_motion::rot6d_track`).
+    pub rotations_bridged: usize,
     /// Largest horizontal offset (metres) the separation gave the follower; 0 without it.
     pub separation_max_m: f64,
     /// Seconds spent on the separation.
@@ -194,7 +197,16 @@ pub fn generate_follower_hooked(
         .chunks_exact(DuetFollower::DIMS)
         .flat_map(|row| row[DuetFollower::CONTACTS].iter().copied())
         .collect();
-    let mut follower = DuetFollower::decode(&data, leader, sigma).map_err(|e| e.to_string())?;
+    let (mut follower, rotations_bridged) =
+        DuetFollower::decode_counted(&data, leader, sigma).map_err(|e| e.to_string())?;
+    if rotations_bridged > 0 {
+        tracing::info!(
+            rotations = rotations_bridged,
+            "bridged generated joint rotations whose 6D rows had shrunk below {} (a turn \
+             passed through the origin)",
+            dancegen_motion::rot6d_track::MIN_ROW_LENGTH
+        );
+    }
     if follower
         .trans
         .iter()
@@ -219,6 +231,7 @@ pub fn generate_follower_hooked(
         contacts,
         sample_s,
         decode_s,
+        rotations_bridged,
         separation_max_m,
         separate_s: t2.elapsed().as_secs_f64(),
     })

@@ -294,6 +294,13 @@ impl DanceSystem for Duet {
         })?;
         let mut follower = out.follower;
         let mut notes = Vec::new();
+        if out.rotations_bridged > 0 {
+            notes.push(format!(
+                "{} joint rotations bridged where the model's 6D output shrank towards zero \
+                 (decoding, not part of ReactDance)",
+                out.rotations_bridged
+            ));
+        }
         let mut separation_max_m = out.separation_max_m;
         let mut separate_s = out.separate_s;
         if let Some(leash) = foot_lock {

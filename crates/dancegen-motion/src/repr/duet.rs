@@ -44,6 +44,7 @@ use std::ops::Range;
 use super::motion::{EDGE_CONTACT_VELOCITY, POSE_DIMS, SMPL_JOINTS, contacts_velocity};
 use super::{ReprError, SmplMotion, check_fps, frames_of};
 use crate::conventions::CANONICAL_FPS;
+use crate::rot6d_track::decode_6d_track;
 use crate::rotation::{Mat3, wrap_angle};
 use crate::smoothing::{Ends, gaussian_smooth_truncated};
 
@@ -153,6 +154,16 @@ impl DuetFollower {
     /// The follower back in `leader`'s world frame from `(T, 151)` (contacts are ignored);
     /// `sigma` as in [`Self::encode`].
     pub fn decode(data: &[f32], leader: &SmplMotion, sigma: f64) -> Result<SmplMotion, ReprError> {
+        Self::decode_counted(data, leader, sigma).map(|(m, _)| m)
+    }
+
+    /// [`Self::decode`], and the number of joint rotations (over joints and frames) whose 6D
+    /// rows had lost their length and were bridged ([`crate::rot6d_track`]).
+    pub fn decode_counted(
+        data: &[f32],
+        leader: &SmplMotion,
+        sigma: f64,
+    ) -> Result<(SmplMotion, usize), ReprError> {
         let t = frames_of("DuetFollower::decode", data, Self::DIMS)?;
         let tl = leader.validate()?;
         if t != tl {
@@ -161,27 +172,37 @@ impl DuetFollower {
             )));
         }
         let frames = leader_frames(leader, sigma);
+        let track = |k: usize| -> Vec<[f64; 6]> {
+            data.chunks_exact(Self::DIMS)
+                .map(|row| std::array::from_fn(|i| f64::from(row[k + i])))
+                .collect()
+        };
+        let mut bridged = 0;
         let mut poses = vec![0f32; t * POSE_DIMS];
+        for (k, j) in UPPER_JOINTS.into_iter().chain(LOWER_JOINTS).enumerate() {
+            let (rot, n) = decode_6d_track(&track(6 * k));
+            bridged += n;
+            for (f, r) in rot.iter().enumerate() {
+                poses[f * POSE_DIMS + 3 * j..f * POSE_DIMS + 3 * j + 3]
+                    .copy_from_slice(&r.to_axis_angle().map(|v| v as f32));
+            }
+        }
+        let (root_rot, n) = decode_6d_track(&track(Self::ROOT_ROT.start));
+        bridged += n;
         let mut trans = Vec::with_capacity(t * 3);
         for (f, row) in data.chunks_exact(Self::DIMS).enumerate() {
-            let six = |k: usize| -> Mat3 {
-                let d: [f64; 6] = std::array::from_fn(|i| f64::from(row[k + i]));
-                Mat3::from_6d(&d)
-            };
-            for (k, j) in UPPER_JOINTS.into_iter().chain(LOWER_JOINTS).enumerate() {
-                let aa = six(6 * k).to_axis_angle();
-                poses[f * POSE_DIMS + 3 * j..f * POSE_DIMS + 3 * j + 3]
-                    .copy_from_slice(&aa.map(|v| v as f32));
-            }
             let h = yaw(frames[f]);
             let r = &row[Self::ROOT_POS];
             let off = h.mul_vec([f64::from(r[0]), 0.0, f64::from(r[2])]);
             let pl = pelvis(leader, f);
             trans.extend([pl[0] + off[0], f64::from(r[1]), pl[2] + off[2]].map(|v| v as f32));
-            let root = h.mul(&six(Self::ROOT_ROT.start)).to_axis_angle();
+            let root = h.mul(&root_rot[f]).to_axis_angle();
             poses[f * POSE_DIMS..f * POSE_DIMS + 3].copy_from_slice(&root.map(|v| v as f32));
         }
-        SmplMotion::new(CANONICAL_FPS as f32, poses, trans)
+        Ok((
+            SmplMotion::new(CANONICAL_FPS as f32, poses, trans)?,
+            bridged,
+        ))
     }
 }
 

@@ -1,0 +1,133 @@
+//! Decoding a generated track of 6D rotations (one joint over time) where the network's rows
+//! lose their length.
+//!
+//! Training data hold proper 6D rotations: two orthonormal rows, each of length 1. A network
+//! that regresses 6D and is unsure between two orientations far apart (a follower half-way
+//! through a turn in the duet model) can move its output along the straight line between them,
+//! through the origin: the rows shrink to a few centimetres and Gram–Schmidt
+//! ([`Mat3::from_6d`]) turns their sign change into a 90–150° jump in one or two frames. Measured
+//! on the duet model's held-out followers: the root's first row shrinks from 0.96 to 0.11 and
+//! back over six frames while the decoded pelvis turns 89° and then 64° in two frames
+//! (docs/duet-eval.md). A row that short no longer says which way it points.
+//!
+//! The decoding keeps every frame whose rows are long enough as Gram–Schmidt gives it and
+//! bridges each interior run of short-row frames by the spherical interpolation between the
+//! last and the next well-defined frame: the turn the network made is kept, spread over the
+//! frames in which it made it instead of the frame in which its sign flipped. A run at the
+//! start or the end of the track has one side only and stays as Gram–Schmidt gives it.
+//! Callers log the number of bridged frames: a model that needs many should be fixed.
+
+use crate::rotation::{Mat3, Quat};
+use crate::vec3::{dot, norm};
+
+/// Shortest row (the first row, or the second row's part orthogonal to the first) of a
+/// well-defined 6D rotation. Gram–Schmidt divides by this length, so below one half an error
+/// in the row turns the rotation by more than twice as much as in a unit row. The generated
+/// duet followers keep their rows at 0.8–1.0 except in the middle of such sign flips.
+pub const MIN_ROW_LENGTH: f64 = 0.5;
+
+/// Whether the 6D rotation `d` (pytorch3d's two rows) has both rows long enough.
+pub fn well_defined(d: &[f64; 6]) -> bool {
+    let (a, b) = ([d[0], d[1], d[2]], [d[3], d[4], d[5]]);
+    let na = norm(a);
+    if na < MIN_ROW_LENGTH {
+        return false;
+    }
+    let p = dot(a, b) / na;
+    let ortho = (dot(b, b) - p * p).max(0.0).sqrt();
+    ortho >= MIN_ROW_LENGTH
+}
+
+/// The rotations of a track of 6D values, with interior runs of ill-defined frames bridged (see
+/// the module docs), and the number of frames bridged.
+pub fn decode_6d_track(track: &[[f64; 6]]) -> (Vec<Mat3>, usize) {
+    let mut rot: Vec<Mat3> = track.iter().map(Mat3::from_6d).collect();
+    let good: Vec<bool> = track.iter().map(well_defined).collect();
+    let mut bridged = 0;
+    let mut i = 0;
+    while i < track.len() {
+        if good[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < track.len() && !good[i] {
+            i += 1;
+        }
+        // Frames start..i are ill-defined; bridge them when both sides are well-defined.
+        if start == 0 || i == track.len() {
+            continue;
+        }
+        let (before, after) = (start - 1, i);
+        let (qa, qb) = (rot[before].to_quat(), rot[after].to_quat());
+        for (k, r) in rot.iter_mut().enumerate().take(after).skip(start) {
+            let s = (k - before) as f64 / (after - before) as f64;
+            *r = Mat3::from_quat(Quat::slerp(qa, qb, s));
+            bridged += 1;
+        }
+    }
+    (rot, bridged)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angle_deg(a: &Mat3, b: &Mat3) -> f64 {
+        let r = a.transpose().mul(b);
+        let tr = r.0[0][0] + r.0[1][1] + r.0[2][2];
+        ((tr - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
+    fn yaw(deg: f64) -> Mat3 {
+        Mat3::from_axis_rotation(1, deg.to_radians())
+    }
+
+    /// A 170° turn regressed as the straight line between its ends over 11 frames: Gram–Schmidt
+    /// jumps in one frame, the bridged track turns evenly across the frames with short rows.
+    #[test]
+    fn a_turn_through_the_origin_is_spread_over_its_frames() {
+        let (a, b) = (yaw(0.0).to_6d(), yaw(170.0).to_6d());
+        let n = 11;
+        let track: Vec<[f64; 6]> = (0..n)
+            .map(|k| {
+                let s = k as f64 / (n - 1) as f64;
+                std::array::from_fn(|c| (1.0 - s) * a[c] + s * b[c])
+            })
+            .collect();
+        let raw: Vec<Mat3> = track.iter().map(Mat3::from_6d).collect();
+        let raw_max = raw
+            .windows(2)
+            .map(|w| angle_deg(&w[0], &w[1]))
+            .fold(0.0, f64::max);
+        assert!(raw_max > 60.0, "Gram–Schmidt jumps: {raw_max}");
+        let (rot, bridged) = decode_6d_track(&track);
+        assert!(bridged > 0 && bridged < n - 2, "bridged {bridged}");
+        let steps: Vec<f64> = rot.windows(2).map(|w| angle_deg(&w[0], &w[1])).collect();
+        let max = steps.iter().copied().fold(0.0, f64::max);
+        assert!(max < raw_max / 2.0, "largest step {max} against {raw_max}");
+        // The ends and the whole turn are kept.
+        assert!(angle_deg(&rot[0], &yaw(0.0)) < 1e-6);
+        assert!(angle_deg(&rot[n - 1], &yaw(170.0)) < 1e-6);
+    }
+
+    /// Unit rows are never touched; an ill-defined run at either end has one side only and
+    /// stays as Gram–Schmidt gives it.
+    #[test]
+    fn proper_rotations_and_edge_runs_are_kept() {
+        let track: Vec<[f64; 6]> = (0..30).map(|k| yaw(24.0 * k as f64).to_6d()).collect();
+        let (rot, bridged) = decode_6d_track(&track);
+        assert_eq!(bridged, 0);
+        for (r, d) in rot.iter().zip(&track) {
+            assert!(angle_deg(r, &Mat3::from_6d(d)) < 1e-9);
+        }
+        let mut edges = track.clone();
+        edges[0] = [0.1, 0.0, 0.0, 0.0, 1.0, 0.0];
+        edges[29] = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let (rot, bridged) = decode_6d_track(&edges);
+        assert_eq!(bridged, 0);
+        assert!(angle_deg(&rot[0], &Mat3::from_6d(&edges[0])) < 1e-9);
+        assert!(!well_defined(&edges[29]));
+        assert!(well_defined(&track[5]));
+    }
+}
