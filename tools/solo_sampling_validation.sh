@@ -8,8 +8,9 @@
 # 12 dances: escape_from_chaosland.ogg and metal_madness.ogg, cuts 20-36 s and 60-76 s (CUTS),
 # seeds 0-2, --genre salsa. Prints FID_k against the real training clips of REFERENCE, Div_k, the
 # share upside down, the mean BAS (Bailando variant, each clip against its cut's beats) and the
-# mean joint speeds (m/s) of pelvis, knee, ankle, elbow and wrist, for the model and the
-# reference.
+# mean joint speeds (m/s) of pelvis, knee, ankle, elbow and wrist, and the physical figures of
+# `dancegen eval --metrics physical` (joint speed, steps, jerk, largest frame step, foot sliding,
+# crossed shins, floating), for the model and the reference.
 #
 # Environment: MODEL (required), DANCEGEN (default target/release/dancegen),
 #   REFERENCE=target/solo-eval/gt_train (real training clips as (T, 24, 3) .npy, written by
@@ -56,6 +57,10 @@ PY
 done
 "$BIN" -q eval --pred "$OUT/dances" --gt "$REFERENCE" --protocol none --fps 30 \
     --metrics fid_k,div_k,inverted,freeze --json "$OUT/eval/set.json" >/dev/null
+"$BIN" -q eval --pred "$OUT/dances" --protocol none --fps 30 --metrics physical \
+    --json "$OUT/eval/physical.json" >/dev/null
+[ -f "$OUT/eval/physical_real.json" ] || "$BIN" -q eval --pred "$REFERENCE" --protocol none \
+    --fps 30 --metrics physical --json "$OUT/eval/physical_real.json" >/dev/null
 $PYTHON - "$OUT" "$REFERENCE" <<'PY'
 import glob, json, os, sys
 import numpy as np
@@ -68,6 +73,12 @@ def speeds(files):
     return " / ".join(f"{m[j]:.2f}" for j in (0, 4, 7, 18, 20))
 print(f"fid_k {s['fid_k']:.1f}  div_k {s['div_k']:.2f}  inverted {s['inverted']:.3f}  "
       f"bas {np.mean(bas):.3f} ({len(bas)} dances)")
+def physical(name):
+    p = json.load(open(os.path.join(out, "eval", name)))
+    return "  ".join(f"{k} {p[k]:.3g}" for k in ("joint_speed", "step_rate", "jerk", "max_step",
+                                                  "foot_slide", "leg_cross", "float"))
+print(f"physical: model {physical('physical.json')}")
+print(f"physical: real  {physical('physical_real.json')}")
 print(f"speed m/s pelvis/knee/ankle/elbow/wrist: model {speeds(glob.glob(os.path.join(out, 'dances/*.npy')))}, "
       f"real {speeds(glob.glob(os.path.join(ref, '*.npy')))}")
 PY

@@ -73,6 +73,12 @@ pub struct PddmConfig {
     /// Train and sample every window in its own heading frame (`crate::heading`; an experiment,
     /// not in the paper, measured not to cure the upside-down v3 bodies). Off in older bundles.
     pub canonical_heading: bool,
+    /// Predict x̂0 through a noise-dependent skip of the input ([`crate::denoiser::X0Skip`]):
+    /// at low noise the network only corrects its input instead of rebuilding every pose through
+    /// the transformer. Not in Lodge++, which predicts x̂0 directly (issue 41: the shipped
+    /// network, asked for x̂0 from nearly clean windows, returned them at 62 % of their speed).
+    /// Off in older bundles.
+    pub x0_skip: bool,
 }
 
 impl Default for PddmConfig {
@@ -87,6 +93,7 @@ impl Default for PddmConfig {
             foot_refine: true,
             window: LODGEPP_WINDOW,
             canonical_heading: false,
+            x0_skip: false,
         }
     }
 }
@@ -241,7 +248,7 @@ impl PddmTable {
     ) -> crate::training::PddmTrainModel {
         let g = self.genres.len();
         crate::training::PddmTrainModel {
-            denoiser: self.pddm.init(g, mean, std, device),
+            denoiser: self.pddm.init(g, mean, std, &self.shift.schedule(), device),
             discriminator: self
                 .use_discriminator
                 .then(|| self.discriminator.init(g, device)),

@@ -6,10 +6,13 @@
 //! encoded by a linear layer and `music_layers` transformer encoder layers and, with a genre
 //! token, forms the cross-attention memory; the FiLM vector is timestep MLP + genre embedding +
 //! pooled music. Classifier-free guidance replaces the music by a learned null token and the
-//! genre by a null genre. After the main output comes the [`FootRefine`] block.
+//! genre by a null genre. After the main output comes the [`FootRefine`] block. With
+//! `x0_skip` (not Lodge++) the main output is added to a noise-dependent share of the input
+//! ([`X0Skip`]).
 
 use dancegen_nn::attention::{AttnMasks, ProjectedKv};
 use dancegen_nn::burn;
+use dancegen_nn::diffusion::pddm::ResidualShift;
 use dancegen_nn::diffusion::{Conditioning, Denoiser};
 use dancegen_nn::loss::FkSkeleton;
 use dancegen_nn::pos_encoding::{Rotary, sinusoidal};
@@ -69,11 +72,67 @@ pub struct PddmDenoiser {
     pub denorm: Denormalize,
     pub genres: usize,
     pub d_model: usize,
+    /// Set by the config (`x0_skip`), never stored with the weights.
+    #[module(skip)]
+    pub skip: Option<X0Skip>,
+}
+
+/// The skip of EDM's preconditioning (Karras et al. 2022, eq. 7 with `c_out = 1`) on the
+/// residual-shift process: `x̂0 = c_skip(t) · ỹ_t + F(d_t, …)`, where
+/// `ỹ_t = (d_t − η_t d_p) / (1 − η_t)` is the clean window plus noise of standard deviation
+/// `σ_t = κ √η_t / (1 − η_t)` (eq. 9 solved for `d0`) and `c_skip = 1 / (1 + σ_t²)` (the
+/// data are normalised to unit variance). At the last steps (`σ_1` = 0.04) the window passes
+/// through almost unchanged and the network learns the correction; at the first
+/// (`c_skip` ≈ 2.5e-7) it predicts x̂0 alone, as without the skip.
+#[derive(Clone, Debug)]
+pub struct X0Skip {
+    /// `η_t` and `c_skip(t)` for the 0-based timestep the network sees (`t − 1`).
+    coefficients: Vec<(f32, f32)>,
+}
+
+impl X0Skip {
+    pub fn new(schedule: &ResidualShift) -> Self {
+        let coefficients = (1..=schedule.steps())
+            .map(|t| {
+                let eta = schedule.eta[t];
+                let sigma = schedule.kappa * eta.sqrt() / (1.0 - eta);
+                (eta as f32, (1.0 / (1.0 + sigma * sigma)) as f32)
+            })
+            .collect();
+        X0Skip { coefficients }
+    }
+
+    /// `c_skip · ỹ_t` for windows `d_t` at 0-based timesteps `t` (one per window), with
+    /// primitives `d_p`.
+    pub fn apply(&self, d_t: Tensor<3>, d_p: Tensor<3>, t: &[f32]) -> Tensor<3> {
+        let [b, _, _] = d_t.dims();
+        assert_eq!(t.len(), b, "one timestep per window");
+        let device = d_t.device();
+        let (mut eta, mut input, mut prims) = (vec![], vec![], vec![]);
+        for &t in t {
+            let last = self.coefficients.len() - 1;
+            let (e, c) = self.coefficients[(t.round().max(0.0) as usize).min(last)];
+            eta.push(e);
+            // c_skip · (d_t − η d_p) / (1 − η)
+            input.push(c / (1.0 - e));
+            prims.push(-c * e / (1.0 - e));
+        }
+        let col = |v: Vec<f32>| Tensor::<3>::from_data(TensorData::new(v, [b, 1, 1]), &device);
+        d_t * col(input) + d_p * col(prims)
+    }
 }
 
 impl PddmConfig {
-    /// A fresh network for `genres` genres and the data's normaliser (`mean`, `std`).
-    pub fn init(&self, genres: usize, mean: &[f64], std: &[f64], device: &Device) -> PddmDenoiser {
+    /// A fresh network for `genres` genres, the data's normaliser (`mean`, `std`) and the
+    /// residual-shift `schedule` it is trained on (used by `x0_skip`).
+    pub fn init(
+        &self,
+        genres: usize,
+        mean: &[f64],
+        std: &[f64],
+        schedule: &ResidualShift,
+        device: &Device,
+    ) -> PddmDenoiser {
         let d = self.d_model;
         PddmDenoiser {
             input: LinearConfig::new(2 * DIMS + 1, d).init(device),
@@ -103,6 +162,7 @@ impl PddmConfig {
             denorm: Denormalize::from_mean_std(mean, std, device),
             genres,
             d_model: d,
+            skip: self.x0_skip.then(|| X0Skip::new(schedule)),
         }
     }
 }
@@ -277,12 +337,19 @@ impl PddmDenoiser {
             cross_masks: &none,
             rotary: Some(&rotary),
         };
+        let skipped = self
+            .skip
+            .as_ref()
+            .map(|s| s.apply(x_t.clone(), p.primitives.clone(), t));
         let x = Tensor::cat(vec![x_t, p.primitives.clone(), p.mask.clone()], 2);
         let mut h = self.input.forward(x);
         for (i, l) in self.layers.iter().enumerate() {
             h = l.forward_with_kv(h, &ctx, p.memory_kv.as_ref().map(|kv| &kv[i]));
         }
-        let main = self.output.forward(h.clone());
+        let main = match skipped {
+            Some(s) => s + self.output.forward(h.clone()),
+            None => self.output.forward(h.clone()),
+        };
         let refined = match (&self.refine, refine) {
             (Some(r), true) => {
                 main.clone() + r.forward(h, main.clone(), film, &self.denorm, &FkSkeleton::smpl24())
@@ -329,5 +396,52 @@ impl Denoiser for PddmSampling<'_> {
             Conditioning::Null => panic!("PddmSampling needs the condition (primitives)"),
             c => self.net.forward(x_t, &t, c, self.refine).refined,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dancegen_nn::diffusion::pddm::ResidualShiftConfig;
+
+    fn host(x: Tensor<3>) -> Vec<f32> {
+        x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
+    }
+
+    #[test]
+    fn the_skip_removes_the_primitive_shift_and_fades_with_noise() {
+        let dev = dancegen_nn::device::inference();
+        let schedule = ResidualShiftConfig::lodgepp().init();
+        let skip = X0Skip::new(&schedule);
+        let (b, t, d) = (2, 3, 4);
+        let d0: Vec<f32> = (0..b * t * d).map(|i| (i as f32 * 0.37).sin()).collect();
+        let dp: Vec<f32> = (0..b * t * d).map(|i| (i as f32 * 0.11).cos()).collect();
+        let d0t = Tensor::<3>::from_data(TensorData::new(d0.clone(), [b, t, d]), &dev);
+        let dpt = Tensor::<3>::from_data(TensorData::new(dp, [b, t, d]), &dev);
+        // Without noise, ỹ_t is the clean window at every step: c_skip · d0.
+        for step in [1usize, 25, 50] {
+            let d_t = schedule.q_sample(
+                d0t.clone(),
+                dpt.clone(),
+                &[step, step],
+                Tensor::zeros([b, t, d], &dev),
+            );
+            let out = host(skip.apply(d_t, dpt.clone(), &[(step - 1) as f32; 2]));
+            let eta = schedule.eta[step];
+            let sigma = schedule.kappa * eta.sqrt() / (1.0 - eta);
+            let c = 1.0 / (1.0 + sigma * sigma);
+            for (o, x) in out.iter().zip(&d0) {
+                assert!(
+                    (f64::from(*o) - c * f64::from(*x)).abs() < 1e-4,
+                    "step {step}: {o} against {}",
+                    c * f64::from(*x)
+                );
+            }
+        }
+        // Nearly all of the input passes at the last step, nearly none at the first.
+        let (_, c1) = skip.coefficients[0];
+        let (_, c50) = skip.coefficients[49];
+        assert!(c1 > 0.99, "c_skip at t = 1: {c1}");
+        assert!(c50 < 1e-5, "c_skip at t = 50: {c50}");
     }
 }

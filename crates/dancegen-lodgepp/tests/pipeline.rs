@@ -70,6 +70,7 @@ fn tiny_model_with(device: &Device, canonical_heading: bool) -> SoloModel {
         foot_refine: true,
         window: WINDOW,
         canonical_heading,
+        x0_skip: false,
     };
     pddm.shift.steps = 8;
     pddm.genres = genres.clone();
