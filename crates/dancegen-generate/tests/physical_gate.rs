@@ -210,10 +210,6 @@ fn the_spike_bound_is_what_the_clean_takes_are_held_to() {
 }
 
 #[test]
-#[ignore = "issue 41, not met yet: the retrained lodgepp-small dances the demo song at 0.36 m/s \
-            joint speed, 0.25 m/s pelvis speed and 1.02 steps/s (real salsa at least 0.39, 0.28 \
-            and 1.18 with the -25 % margin) with crossed shins in 23 % of frames (real at most \
-            16 %); its floor, jerk, spikes and sliding pass (models/lodgepp-small/MODEL_CARD.md)"]
 fn solo_lodgepp_small_is_plausible() {
     // Salsa, the model's default genre and most of its data, against the real salsa.
     let real = real(&["cmu-salsa"], Some("salsa"));
