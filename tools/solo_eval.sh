@@ -10,7 +10,8 @@
 #   CONFIGS="full no_global no_foot_refine no_pen_guidance no_foot_lock no_beat_align edge"
 #   LONG=1               also the whole song per configuration and seed (0: segments only)
 #   MODEL=models/lodgepp-small   GENRE=salsa
-#   DATASET=target/datasets/solo (built by `dancegen dataset build`, manifest.json + held_out/)
+#   DATASET=target/datasets/solo-v3 (built by `dancegen dataset build`, manifest.json + held_out/;
+#                        the command is at the top of configs/lodgepp_small_pddm.toml)
 #   SONG=../shared/data/music/sectoid/feelings.ogg (the held-out song of the manifest)
 #   DANCEGEN=path/to/dancegen (default: target/release/dancegen if it has `generate`, else the
 #            test-profile build target/debug/dancegen, built if needed)
@@ -26,7 +27,8 @@
 #                        system and the real motion of the first held-out clip, at the same
 #                        moments, to images/solo-eval-contact.png beside the report (default: 1,
 #                        0 in a dry run)
-#   CONTACT_CLIP=60_13_scaled  the held-out clip of the contact sheet (default: the first)
+#   CONTACT_CLIP=60_13_scaled  the held-out clip of the contact sheet (default: the first of the
+#                        genre GENRE, so the generated and the real dancer dance the same genre)
 #
 # Every motion also gets the physical plausibility figures (`dancegen eval --metrics physical`).
 #
@@ -46,7 +48,7 @@ CONFIGS=${CONFIGS:-"full no_global no_foot_refine no_pen_guidance no_foot_lock n
 LONG=${LONG:-1}
 MODEL=${MODEL:-$ROOT/models/lodgepp-small}
 GENRE=${GENRE:-salsa}
-DATASET=${DATASET:-$ROOT/target/datasets/solo}
+DATASET=${DATASET:-$ROOT/target/datasets/solo-v3}
 SONG=${SONG:-$ROOT/../shared/data/music/sectoid/feelings.ogg}
 PYTHON=${PYTHON:-python3}
 OUT=${OUT:-$ROOT/target/solo-eval}
@@ -235,11 +237,17 @@ done
 # ---- contact sheet: the first seed's full system and the real motion of the first held-out
 # clip, at the same moments (not in a dry run unless CONTACT=1: there "generated" is real)
 if [ "$CONTACT" = 1 ]; then
-    if [ -n "${CONTACT_CLIP:-}" ]; then
-        read -r stem start end _ < <(awk -v c="$CONTACT_CLIP" '$1 == c' "$OUT/clips.txt")
-    else
-        read -r stem start end _ < "$OUT/clips.txt"
+    if [ -z "${CONTACT_CLIP:-}" ]; then
+        CONTACT_CLIP=$($PYTHON - "$DATASET/manifest.json" "$GENRE" "$OUT/clips.txt" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+genre = {c["name"]: c.get("genre") for c in m["clips"]}
+stems = [line.split()[0] for line in open(sys.argv[3]) if line.strip()]
+print(next((s for s in stems if genre.get(s) == sys.argv[2]), stems[0]))
+PY
+)
     fi
+    read -r stem start end _ < <(awk -v c="$CONTACT_CLIP" '$1 == c' "$OUT/clips.txt")
     read -r seed _ <<< "$SEEDS"
     contact_sheet_clip "$OUT/gen/full/seed$seed/seg/$stem.npy" "generated (full, seed $seed)" \
         "$MODEL_NAME (\`$(basename "$MODEL")\`, full system, seed $seed)" "$stem" "$start" "$end"
