@@ -4,17 +4,20 @@
 //! Training data hold proper 6D rotations: two orthonormal rows, each of length 1. A network
 //! that regresses 6D and is unsure between two orientations far apart (a follower half-way
 //! through a turn in the duet model) can move its output along the straight line between them,
-//! through the origin: the rows shrink to a few centimetres and Gram–Schmidt
-//! ([`Mat3::from_6d`]) turns their sign change into a 90–150° jump in one or two frames. Measured
-//! on the duet model's held-out followers: the root's first row shrinks from 0.96 to 0.11 and
-//! back over six frames while the decoded pelvis turns 89° and then 64° in two frames
-//! (docs/duet-eval.md). A row that short no longer says which way it points.
+//! through the origin: the rows shrink to a tenth of their length and Gram–Schmidt
+//! ([`Mat3::from_6d`]) turns their sign change into a 90–150° jump in one or two frames.
+//! Measured on a held-out duet follower (leader `61_13_scaled`, seed 0, no post-processing):
+//! the root's first row shrinks from 0.96 to 0.11 and back over six frames while the decoded
+//! pelvis turns 89° and then 64° in two frames (models/reactdance-small/MODEL_CARD.md). A row
+//! that short no longer says which way it points.
 //!
 //! The decoding keeps every frame whose rows are long enough as Gram–Schmidt gives it and
 //! bridges each interior run of short-row frames by the spherical interpolation between the
 //! last and the next well-defined frame: the turn the network made is kept, spread over the
 //! frames in which it made it instead of the frame in which its sign flipped. A run at the
-//! start or the end of the track has one side only and stays as Gram–Schmidt gives it.
+//! start or the end of the track has one side only and stays as Gram–Schmidt gives it. So does
+//! a run holding a non-finite value: that is a broken output for the caller to report, not a
+//! turn to smooth over.
 //! Callers log the number of bridged frames: a model that needs many should be fixed.
 
 use crate::rotation::{Mat3, Quat};
@@ -22,11 +25,13 @@ use crate::vec3::{dot, norm};
 
 /// Shortest row (the first row, or the second row's part orthogonal to the first) of a
 /// well-defined 6D rotation. Gram–Schmidt divides by this length, so below one half an error
-/// in the row turns the rotation by more than twice as much as in a unit row. The generated
-/// duet followers keep their rows at 0.8–1.0 except in the middle of such sign flips.
+/// in the row turns the rotation by more than twice as much as in a unit row. In the held-out
+/// duet follower of the module docs, the root's first row was 0.64–0.97 long on the 20
+/// frames around the flip and 0.11–0.41 in its three middle frames.
 pub const MIN_ROW_LENGTH: f64 = 0.5;
 
-/// Whether the 6D rotation `d` (pytorch3d's two rows) has both rows long enough.
+/// Whether the 6D rotation `d` (pytorch3d's two rows) has both rows long enough (false for
+/// non-finite values).
 pub fn well_defined(d: &[f64; 6]) -> bool {
     let (a, b) = ([d[0], d[1], d[2]], [d[3], d[4], d[5]]);
     let na = norm(a);
@@ -54,8 +59,10 @@ pub fn decode_6d_track(track: &[[f64; 6]]) -> (Vec<Mat3>, usize) {
         while i < track.len() && !good[i] {
             i += 1;
         }
-        // Frames start..i are ill-defined; bridge them when both sides are well-defined.
-        if start == 0 || i == track.len() {
+        // Frames start..i are ill-defined; bridge them when both sides are well-defined and
+        // every value is finite.
+        let finite = track[start..i].iter().flatten().all(|v| v.is_finite());
+        if start == 0 || i == track.len() || !finite {
             continue;
         }
         let (before, after) = (start - 1, i);
@@ -129,5 +136,17 @@ mod tests {
         assert!(angle_deg(&rot[0], &Mat3::from_6d(&edges[0])) < 1e-9);
         assert!(!well_defined(&edges[29]));
         assert!(well_defined(&track[5]));
+    }
+
+    /// A non-finite frame is not smoothed into a rotation: it stays broken, so the caller's
+    /// check for non-finite output still sees it.
+    #[test]
+    fn non_finite_frames_are_not_bridged() {
+        let mut track: Vec<[f64; 6]> = (0..10).map(|k| yaw(10.0 * k as f64).to_6d()).collect();
+        track[4] = [f64::NAN; 6];
+        assert!(!well_defined(&track[4]));
+        let (rot, bridged) = decode_6d_track(&track);
+        assert_eq!(bridged, 0);
+        assert!(rot[4].0.iter().flatten().any(|v| !v.is_finite()));
     }
 }
