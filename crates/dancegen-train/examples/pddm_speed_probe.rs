@@ -22,10 +22,8 @@ use dancegen_nn::device;
 use dancegen_nn::diffusion::Conditioning;
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::loss::FkSkeleton;
-use dancegen_nn::weights::{self, Layout};
-use dancegen_train::TrainTask;
-use dancegen_train::data::{DataPosition, Normalizer, WindowDataset};
-use dancegen_train::tasks::lodgepp::PddmTask;
+use dancegen_train::data::DataPosition;
+use dancegen_train::tasks::lodgepp::PddmCheckpoint;
 
 const FPS: f64 = 30.0;
 
@@ -89,15 +87,8 @@ fn probe() -> Result<(), String> {
         _ => return Err("usage: pddm_speed_probe RUN_DIR CHECKPOINT.safetensors [BATCHES]".into()),
     };
     let (run, ck) = (PathBuf::from(run), PathBuf::from(ck));
-    let s = |e: &dyn std::fmt::Display| e.to_string();
-    let config = dancegen_train::run_config(&run).map_err(|e| s(&e))?;
-    let task = PddmTask::from_config(&config, &run.join("config.toml"))?;
-    let normalizer = Normalizer::load(&run.join("normalizer.json")).map_err(|e| s(&e))?;
-    let clips = WindowDataset::read_clips(&config.data).map_err(|e| s(&e))?;
-    let data = WindowDataset::new(clips, &config.data, &normalizer, 5).map_err(|e| s(&e))?;
+    let PddmCheckpoint { task, data, model } = PddmCheckpoint::load(&run, &ck)?;
     let dev = device::inference();
-    let model = weights::load(task.init_with_data(&dev, &normalizer), &ck, Layout::Burn)
-        .map_err(|e| format!("{}: {e}", ck.display()))?;
     let net = &model.denoiser;
     let skel = FkSkeleton::smpl24();
     let fk = |x: Tensor<3>| kinematics(joints(net.denorm.apply(x), &skel));
@@ -131,7 +122,6 @@ fn probe() -> Result<(), String> {
             music_encoded: None,
         };
         add("ground truth".into(), fk(x.clone()));
-        add("primitives (condition)".into(), fk(cond.primitives.clone()));
         let mut rng = SeededNoise::new(1 + cursor as u64);
         for step in [1usize, 5, 10, 25, 40, 50] {
             let d_t = shift_s.q_sample(

@@ -15,10 +15,8 @@ use dancegen_nn::burn::tensor::Tensor;
 use dancegen_nn::device;
 use dancegen_nn::diffusion::Conditioning;
 use dancegen_nn::diffusion::noise::SeededNoise;
-use dancegen_nn::weights::{self, Layout};
-use dancegen_train::TrainTask;
-use dancegen_train::data::{DataPosition, Normalizer, WindowDataset};
-use dancegen_train::tasks::lodgepp::PddmTask;
+use dancegen_train::data::DataPosition;
+use dancegen_train::tasks::lodgepp::PddmCheckpoint;
 
 fn report(label: &str, x: Tensor<3>, scale: &[f32], shift: &[f32]) {
     let v: Vec<f32> = x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap();
@@ -64,15 +62,8 @@ fn probe() -> Result<(), String> {
         return Err("usage: pddm_upright_probe RUN_DIR CHECKPOINT.safetensors".into());
     };
     let (run, ck) = (PathBuf::from(run), PathBuf::from(ck));
-    let s = |e: &dyn std::fmt::Display| e.to_string();
-    let config = dancegen_train::run_config(&run).map_err(|e| s(&e))?;
-    let task = PddmTask::from_config(&config, &run.join("config.toml"))?;
-    let normalizer = Normalizer::load(&run.join("normalizer.json")).map_err(|e| s(&e))?;
-    let clips = WindowDataset::read_clips(&config.data).map_err(|e| s(&e))?;
-    let data = WindowDataset::new(clips, &config.data, &normalizer, 5).map_err(|e| s(&e))?;
+    let PddmCheckpoint { task, data, model } = PddmCheckpoint::load(&run, &ck)?;
     let dev = device::inference();
-    let model = weights::load(task.init_with_data(&dev, &normalizer), &ck, Layout::Burn)
-        .map_err(|e| format!("{}: {e}", ck.display()))?;
     let net = &model.denoiser;
     let (scale, shift) = net.denorm.host();
     let (batch, _) = data.batch(

@@ -249,6 +249,36 @@ impl PddmTask {
     }
 }
 
+/// A `lodgepp_pddm` run's checkpoint with the run's own task and training windows, on the
+/// inference device: what the diagnostic probes (`examples/pddm_*_probe.rs`) start from.
+pub struct PddmCheckpoint {
+    pub task: PddmTask,
+    pub data: crate::data::WindowDataset,
+    pub model: PddmTrainModel,
+}
+
+impl PddmCheckpoint {
+    /// Reads the run directory `run` (its `config.toml`, `normalizer.json` and data) and the
+    /// weights `checkpoint`.
+    pub fn load(run: &Path, checkpoint: &Path) -> Result<Self, String> {
+        let s = |e: &dyn std::fmt::Display| e.to_string();
+        let config = crate::run_config(run).map_err(|e| s(&e))?;
+        let task = PddmTask::from_config(&config, &run.join("config.toml"))?;
+        let normalizer = Normalizer::load(&run.join("normalizer.json")).map_err(|e| s(&e))?;
+        let clips = crate::data::WindowDataset::read_clips(&config.data).map_err(|e| s(&e))?;
+        let data = crate::data::WindowDataset::new(clips, &config.data, &normalizer, 5)
+            .map_err(|e| s(&e))?;
+        let dev = device::inference();
+        let model = weights::load(
+            task.init_with_data(&dev, &normalizer),
+            checkpoint,
+            Layout::Burn,
+        )
+        .map_err(|e| format!("{}: {e}", checkpoint.display()))?;
+        Ok(Self { task, data, model })
+    }
+}
+
 impl TrainTask for PddmTask {
     type Model = PddmTrainModel;
 
