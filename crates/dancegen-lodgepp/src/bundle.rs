@@ -60,6 +60,10 @@ pub struct SamplingDefaults {
     pub foot_lock: bool,
     /// When a foot counts as planted for the foot lock (absent in older bundles: `either`).
     pub foot_lock_rule: crate::planted_feet::PlantedRule,
+    /// The foot lock's second pass, leg IK on planted feet
+    /// ([`crate::planted_feet::pin_planted_feet_with`]); `false` keeps the root lock only.
+    /// Absent in older bundles: `true`, both passes, as they were tuned with.
+    pub foot_ik: bool,
     /// Final denoising steps the Foot Refine Block acts on (absent: every step, as Lodge++).
     pub foot_refine_steps: Option<usize>,
     /// Channels the Foot Refine Block's refinement is added to (absent: `all`, as Lodge++).
@@ -79,6 +83,7 @@ impl Default for SamplingDefaults {
             max_beat_shift: 6,
             foot_lock: true,
             foot_lock_rule: crate::planted_feet::PlantedRule::Either,
+            foot_ik: true,
             foot_refine_steps: None,
             foot_refine_scope: crate::foot_refine::FootRefineScope::All,
         }

@@ -56,11 +56,14 @@ pub struct GenerateOptions {
     pub penetration: Option<(PenetrationGuidance, usize)>,
     pub gpt: SamplingOptions,
     pub max_beat_shift: usize,
-    /// Post-processing: planted feet stay in place
-    /// ([`crate::planted_feet::clean_planted_feet`]).
+    /// Post-processing: the root stops gliding over planted feet
+    /// ([`crate::planted_feet::lock_planted_feet_with`]), then, with [`Self::foot_ik`], leg IK
+    /// pins them.
     pub foot_lock: bool,
     /// When a foot counts as planted for the foot lock.
     pub foot_lock_rule: crate::planted_feet::PlantedRule,
+    /// With the foot lock, also pin planted feet by leg IK (else the root lock alone).
+    pub foot_ik: bool,
 }
 
 impl GenerateOptions {
@@ -92,6 +95,7 @@ impl GenerateOptions {
             max_beat_shift: s.max_beat_shift,
             foot_lock: s.foot_lock,
             foot_lock_rule: s.foot_lock_rule,
+            foot_ik: s.foot_ik,
         }
     }
 }
@@ -206,12 +210,15 @@ impl SoloModel {
             );
         }
         if opts.foot_lock {
-            let ik = crate::planted_feet::clean_planted_feet_with(&mut out, opts.foot_lock_rule);
-            tracing::debug!(
-                adjusted = ik.adjusted,
-                unreached_m = ik.max_unreached_m,
-                "leg IK on planted feet"
-            );
+            crate::planted_feet::lock_planted_feet_with(&mut out, opts.foot_lock_rule);
+            if opts.foot_ik {
+                let ik = crate::planted_feet::pin_planted_feet_with(&mut out, opts.foot_lock_rule);
+                tracing::debug!(
+                    adjusted = ik.adjusted,
+                    unreached_m = ik.max_unreached_m,
+                    "leg IK on planted feet"
+                );
+            }
         }
         keep_on_stage(&mut out, STAGE_HALF_SIZE, STAGE_SMOOTHING_FRAMES);
         Ok(GeneratedDance {

@@ -536,3 +536,50 @@ fn planted_rule_both_leaves_a_low_unlabelled_foot_alone() {
         );
     }
 }
+
+/// `foot_ik = false` keeps the foot lock's root pass and drops its leg IK: the legs' rotations
+/// are the model's (as with no foot lock at all), only the root's path moves. With the IK on
+/// the legs' rotations change. A bundle without the key keeps both passes.
+#[test]
+fn foot_ik_off_leaves_the_legs_as_generated() {
+    let device = inference_device();
+    let grad = device.clone().autodiff();
+    let frames = 96;
+    let music: Vec<f32> = (0..frames * 35)
+        .map(|i| ((i % 35) as f32 * 0.1).sin())
+        .collect();
+    let beats: Vec<usize> = (0..frames).step_by(12).collect();
+    let model = tiny_model(&device);
+    let run = |lock: bool, ik: bool| {
+        let mut opts = GenerateOptions::defaults(&model, 1, 5);
+        opts.foot_lock = lock;
+        opts.foot_ik = ik;
+        model.generate(&music, &beats, &opts, &device, &grad).frames
+    };
+    let (free, root_only, both) = (run(false, false), run(true, false), run(true, true));
+    let legs: Vec<usize> = [1, 2, 4, 5, 7, 8]
+        .iter()
+        .flat_map(|&j| rot6d(j, 0)..rot6d(j, 0) + 6)
+        .collect();
+    let leg_values = |f: &[f32]| -> Vec<f32> {
+        f.chunks_exact(DIMS)
+            .flat_map(|fr| legs.iter().map(|&c| fr[c]).collect::<Vec<_>>())
+            .collect()
+    };
+    assert_eq!(leg_values(&root_only), leg_values(&free));
+    assert_ne!(
+        leg_values(&both),
+        leg_values(&free),
+        "the leg IK pinned no foot"
+    );
+    let root_x = |f: &[f32]| f.chunks_exact(DIMS).map(|fr| fr[4]).collect::<Vec<_>>();
+    assert_ne!(
+        root_x(&root_only),
+        root_x(&free),
+        "the root lock moved no root"
+    );
+    let parsed: SamplingDefaults = toml::from_str("foot_lock = true").unwrap();
+    assert!(parsed.foot_ik, "older bundles keep both passes");
+    let off: SamplingDefaults = toml::from_str("foot_ik = false").unwrap();
+    assert!(!off.foot_ik);
+}
