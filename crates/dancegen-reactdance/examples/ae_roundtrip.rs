@@ -1,7 +1,10 @@
 //! The HFSQ autoencoder alone on a real couple: encode the follower, decode it, write world
 //! joints — to see how much of a generated follower's error the autoencoder already makes.
 //!
-//!     cargo run --release -p dancegen-reactdance --example ae_roundtrip -- MODEL_DIR FOLLOWER.npz LEADER.npz OUT.npy [LEVELS]
+//!     cargo run --release -p dancegen-reactdance --example ae_roundtrip -- MODEL_DIR FOLLOWER.npz LEADER.npz OUT.npy [LEVELS] [KEEP]
+//!
+//! `KEEP`: streams (`upper`, `lower`, `root`, comma-separated) written back from the input
+//! instead of the reconstruction, to see which stream's reconstruction makes an error.
 
 use dancegen_motion::formats::{LoadedMotion, load_motion_file};
 use dancegen_motion::repr::{DuetFollower, SmplMotion};
@@ -41,6 +44,7 @@ fn main() {
             *v = ((f64::from(*v) - mean[j]) / std[j]) as f32;
         }
     }
+    let input = x.clone();
     let x = Tensor::<3>::from_data(TensorData::new(x, [1, t, d]), &dev);
     let levels = a
         .get(5)
@@ -53,7 +57,21 @@ fn main() {
         .convert::<f32>()
         .try_into_vec::<f32>()
         .unwrap();
-    for row in y.chunks_exact_mut(d) {
+    let keep = a.get(6).map_or("", String::as_str);
+    let kept: Vec<std::ops::Range<usize>> = keep
+        .split(',')
+        .filter(|k| !k.is_empty())
+        .map(|k| match k {
+            "upper" => DuetFollower::STREAMS[0].clone(),
+            "lower" => DuetFollower::STREAMS[1].clone(),
+            "root" => DuetFollower::STREAMS[2].clone(),
+            other => panic!("KEEP: unknown stream {other} (upper, lower, root)"),
+        })
+        .collect();
+    for (row, orig) in y.chunks_exact_mut(d).zip(input.chunks_exact(d)) {
+        for r in &kept {
+            row[r.clone()].copy_from_slice(&orig[r.clone()]);
+        }
         for (j, v) in row.iter_mut().enumerate() {
             *v = (f64::from(*v) * std[j] + mean[j]) as f32;
         }
