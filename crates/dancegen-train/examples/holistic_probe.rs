@@ -13,7 +13,8 @@
 //! - `recon DATASET_DIR VQ_RUN...`: each part autoencoder run's reconstruction of the held-out
 //!   clips, per part: root-relative body joint error (real motion), finger joint error relative to
 //!   the wrist (synthetic fingers), both from the `ric` positions (heading-canonical), and ARKit
-//!   weight error (synthetic face).
+//!   weight error (synthetic face), and the mean jerk of the pelvis-relative body joints of the
+//!   real clips and of their reconstruction.
 //!
 //! ```text
 //!     cargo run --release -p dancegen-train --example holistic_probe -- mmr models/soulnet-small target/datasets/holistic
@@ -255,6 +256,7 @@ fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> 
         .map_err(|e| e.to_string())?;
         let norm = Normalizer::load(&run.join(files::NORMALIZER)).map_err(|e| e.to_string())?;
         let (mut body, mut hands, mut face, mut n) = (0f64, 0f64, 0f64, 0usize);
+        let (mut jerk_real, mut jerk_recon, mut jerk_n) = (0f64, 0f64, 0usize);
         for c in &clips {
             let t = c.frames / 4 * 4;
             let mut x = c.motion[..t * TOTAL_DIMS].to_vec();
@@ -269,6 +271,9 @@ fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> 
                 .unwrap();
             let (jx, fx) = joints_and_face(&x, &norm)?;
             let (jy, fy) = joints_and_face(&y, &norm)?;
+            jerk_real += body_jerk_sum(&jx, t);
+            jerk_recon += body_jerk_sum(&jy, t);
+            jerk_n += t.saturating_sub(3);
             for f in 0..t {
                 let dist = |j: usize, rel: Option<usize>| {
                     let p = |v: &[f32], j: usize, k: usize| v[(f * 52 + j) * 3 + k];
@@ -304,9 +309,35 @@ fn recon(dataset: &Path, runs: &[PathBuf]) -> Result<serde_json::Value, String> 
             "body_mpjpe_mm": 1000.0 * body / n as f64,
             "finger_mpjpe_mm": 1000.0 * hands / n as f64,
             "face_l1": face / n as f64,
+            "body_jerk_real": jerk_real / jerk_n.max(1) as f64,
+            "body_jerk_recon": jerk_recon / jerk_n.max(1) as f64,
         }));
     }
     Ok(serde_json::Value::Array(out))
+}
+
+/// Sum over frames of the mean jerk (m/s³ at 30 fps, third finite difference) of body joints
+/// 1–21 relative to the pelvis, from the `ric` positions `[T, 52, 3]`: how jittery a
+/// reconstruction is next to the real motion, apart from its error.
+fn body_jerk_sum(joints: &[f32], t: usize) -> f64 {
+    let p = |f: usize, j: usize, k: usize| f64::from(joints[(f * 52 + j) * 3 + k]);
+    (0..t.saturating_sub(3))
+        .map(|f| {
+            (1..22)
+                .map(|j| {
+                    (0..3)
+                        .map(|k| {
+                            let d = |g: usize| p(g, j, k) - p(g, 0, k);
+                            (d(f + 3) - 3.0 * d(f + 2) + 3.0 * d(f + 1) - d(f)).powi(2)
+                        })
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .sum::<f64>()
+                / 21.0
+                * 27_000.0
+        })
+        .sum()
 }
 
 fn main() {
