@@ -20,6 +20,8 @@
 //! turn to smooth over.
 //! Callers log the number of bridged frames: a model that needs many should be fixed.
 
+use std::ops::Range;
+
 use crate::rotation::{Mat3, Quat};
 use crate::vec3::{dot, norm};
 
@@ -43,37 +45,58 @@ pub fn well_defined(d: &[f64; 6]) -> bool {
     ortho >= MIN_ROW_LENGTH
 }
 
-/// The rotations of a track of 6D values, with interior runs of ill-defined frames bridged (see
-/// the module docs), and the number of frames bridged.
-pub fn decode_6d_track(track: &[[f64; 6]]) -> (Vec<Mat3>, usize) {
-    let mut rot: Vec<Mat3> = track.iter().map(Mat3::from_6d).collect();
-    let good: Vec<bool> = track.iter().map(well_defined).collect();
-    let mut bridged = 0;
+/// Interior runs of ill-defined, finite frames of `track`, each with a well-defined frame on
+/// either side: the frames [`decode_6d_track`] bridges.
+fn bridgeable_runs(track: &[[f64; 6]]) -> Vec<Range<usize>> {
+    let mut runs = Vec::new();
     let mut i = 0;
     while i < track.len() {
-        if good[i] {
+        if well_defined(&track[i]) {
             i += 1;
             continue;
         }
         let start = i;
-        while i < track.len() && !good[i] {
+        while i < track.len() && !well_defined(&track[i]) {
             i += 1;
         }
-        // Frames start..i are ill-defined; bridge them when both sides are well-defined and
-        // every value is finite.
         let finite = track[start..i].iter().flatten().all(|v| v.is_finite());
-        if start == 0 || i == track.len() || !finite {
-            continue;
+        if start > 0 && i < track.len() && finite {
+            runs.push(start..i);
         }
-        let (before, after) = (start - 1, i);
+    }
+    runs
+}
+
+/// The rotations of a track of 6D values, with interior runs of ill-defined frames bridged (see
+/// the module docs), and the number of frames bridged.
+pub fn decode_6d_track(track: &[[f64; 6]]) -> (Vec<Mat3>, usize) {
+    let mut rot: Vec<Mat3> = track.iter().map(Mat3::from_6d).collect();
+    let mut bridged = 0;
+    for run in bridgeable_runs(track) {
+        let (before, after) = (run.start - 1, run.end);
         let (qa, qb) = (rot[before].to_quat(), rot[after].to_quat());
-        for (k, r) in rot.iter_mut().enumerate().take(after).skip(start) {
+        for k in run {
             let s = (k - before) as f64 / (after - before) as f64;
-            *r = Mat3::from_quat(Quat::slerp(qa, qb, s));
+            rot[k] = Mat3::from_quat(Quat::slerp(qa, qb, s));
             bridged += 1;
         }
     }
     (rot, bridged)
+}
+
+/// [`decode_6d_track`] for a track that stays in 6D (a pipeline with more steps on the raw
+/// values): each bridged frame is rewritten as the 6D of its bridged rotation (unit rows), every
+/// other frame is left exactly as it was. Returns the number of frames rewritten.
+pub fn bridge_6d_track(track: &mut [[f64; 6]]) -> usize {
+    let runs = bridgeable_runs(track);
+    if runs.is_empty() {
+        return 0;
+    }
+    let (rot, bridged) = decode_6d_track(track);
+    for k in runs.into_iter().flatten() {
+        track[k] = rot[k].to_6d();
+    }
+    bridged
 }
 
 #[cfg(test)]
@@ -148,5 +171,38 @@ mod tests {
         let (rot, bridged) = decode_6d_track(&track);
         assert_eq!(bridged, 0);
         assert!(rot[4].0.iter().flatten().any(|v| !v.is_finite()));
+    }
+
+    /// Bridging in place rewrites exactly the frames decoding bridges, as proper 6D of the
+    /// decoded rotations, and leaves every other value untouched.
+    #[test]
+    fn bridging_in_place_rewrites_only_the_bridged_frames() {
+        let (a, b) = (yaw(10.0).to_6d(), yaw(160.0).to_6d());
+        let n = 9;
+        let mut track: Vec<[f64; 6]> = (0..n)
+            .map(|k| {
+                let s = k as f64 / (n - 1) as f64;
+                std::array::from_fn(|i| a[i] * (1.0 - s) + b[i] * s)
+            })
+            .collect();
+        // A slightly long but well-defined row stays as it is (not renormalised).
+        track[0] = a.map(|v| v * 1.2);
+        let before = track.clone();
+        let (rot, count) = decode_6d_track(&before);
+        assert!(count > 0);
+        assert_eq!(bridge_6d_track(&mut track), count);
+        for k in 0..n {
+            if well_defined(&before[k]) {
+                assert_eq!(track[k], before[k], "frame {k} changed");
+            } else {
+                assert!(well_defined(&track[k]), "frame {k} still ill-defined");
+                assert!(angle_deg(&Mat3::from_6d(&track[k]), &rot[k]) < 1e-9);
+            }
+        }
+        assert_eq!(
+            bridge_6d_track(&mut track),
+            0,
+            "a bridged track needs no more"
+        );
     }
 }
