@@ -36,6 +36,7 @@
 use super::motion::{POSE_DIMS, SMPL_JOINTS};
 use super::{ReprError, SmplMotion, frames_of};
 use crate::rigid_fit::best_fit_rotation;
+use crate::rot6d_track::decode_6d_track;
 use crate::rotation::{Mat3, Quat};
 use crate::skeleton::{SMPL24_OFFSETS, SMPL24_PARENTS};
 
@@ -330,7 +331,9 @@ pub(crate) fn decode_ric_joints(
 
 /// Local rotations and root translation from the generalised layout: `decoded` is the output
 /// of [`decode_ric_joints`] on `data`, `offsets` the skeleton's rest offsets. Joints 1–21 take
-/// their rotations from the 6D block; the root rotation is the one that best carries the body
+/// their rotations from the 6D block, each joint's track decoded by
+/// [`crate::rot6d_track::decode_6d_track`] (proper rotations, as in real data, are unchanged;
+/// runs of generated frames whose rows shrank are bridged); the root rotation is the one that best carries the body
 /// so posed (forward kinematics from the root, joints 1–21) onto the decoded joint positions
 /// relative to the pelvis ([`best_fit_rotation`]). Returns `(axis-angle (T', J, 3), trans (T', 3))`.
 ///
@@ -350,6 +353,27 @@ pub(crate) fn decode_ric_rotations(
     let t = decoded.len() / (joints * 3);
     let mut poses = Vec::with_capacity(t * joints * 3);
     let mut trans = Vec::with_capacity(t * 3);
+    // Each joint's 6D track decoded as one, so a generated track whose rows shrink through
+    // the origin turns over its frames instead of flipping in one (`crate::rot6d_track`).
+    let rot = layout.rot();
+    let mut bridged = 0;
+    let tracks: Vec<Vec<Mat3>> = (0..joints - 1)
+        .map(|k| {
+            let track: Vec<[f64; 6]> = (0..t)
+                .map(|f| std::array::from_fn(|i| f64::from(data[f * dims + rot + 6 * k + i])))
+                .collect();
+            let (r, n) = decode_6d_track(&track);
+            bridged += n;
+            r
+        })
+        .collect();
+    if bridged > 0 {
+        tracing::info!(
+            joint_frames = bridged,
+            "bridged joint rotations whose 6D rows had shrunk below {}",
+            crate::rot6d_track::MIN_ROW_LENGTH
+        );
+    }
     let mut local = vec![Mat3::IDENTITY; joints];
     let mut global = vec![Mat3::IDENTITY; BODY_FIT_JOINTS];
     let mut posed = vec![[0.0f64; 3]; BODY_FIT_JOINTS];
@@ -359,10 +383,8 @@ pub(crate) fn decode_ric_rotations(
             let o = (f * joints + k) * 3;
             [decoded[o], decoded[o + 1], decoded[o + 2]].map(f64::from)
         };
-        let row = &data[f * dims..(f + 1) * dims];
-        for (k, d) in row[layout.rot()..layout.vel()].chunks_exact(6).enumerate() {
-            let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
-            local[k + 1] = Mat3::from_6d(&d).transpose();
+        for (k, track) in tracks.iter().enumerate() {
+            local[k + 1] = track[f].transpose();
         }
         // The body posed by its local rotations with the root unrotated at the origin.
         let root_pos = j(0);
