@@ -18,7 +18,11 @@
 //!    by the gradient of its signed distance during denoising.
 //!
 //! 5. **Planted feet** ([`planted_feet`], not part of Lodge++): the root stops gliding with the
-//!    support foot and leg IK pins planted ankles and toes (`--no-foot-lock` switches it off).
+//!    support foot, and (when the bundle asks for it) leg IK pins planted ankles and toes
+//!    (`--no-foot-lock` switches it off).
+//! 6. **Decoding** ([`rotation_tracks`], [`seams`], [`root_flips`], not part of Lodge++): joint
+//!    rotations whose 6D rows shrank are bridged, windows meet their cued frames, and one- to
+//!    three-frame root flips are repaired.
 //!
 //! Motion is EDGE's 151-dim vector at 30 fps ([`layout`]).
 
@@ -37,6 +41,7 @@ pub mod pipeline;
 pub mod planted_feet;
 pub mod primitives;
 pub mod root_flips;
+pub mod rotation_tracks;
 pub mod sampler;
 pub mod seams;
 pub mod training;

@@ -28,6 +28,7 @@ use crate::layout::{self, DIMS, MAIN_DIMS, ROOT_HORIZONTAL, main_channels};
 use crate::library::{key_of, relative_root, retrieval_channels};
 use crate::penetration::{CapsulePairs, PenetrationGuidance, guide};
 use crate::primitives::{WindowPrimitives, align_to_music, key_centres, motion_beats, speed};
+use crate::rotation_tracks::bridge_short_rows;
 use crate::sampler::{HardCues, PddmSampleOptions, sample_windows_hooked};
 use crate::seams::{CuedFrames, SeamCorrection, anchor_windows};
 use dancegen_motion::smoothing::{Ends, gaussian_smooth};
@@ -112,6 +113,8 @@ pub struct GeneratedDance {
     pub seam_correction: SeamCorrection,
     /// Frames whose root orientation flip was repaired ([`crate::root_flips`]).
     pub root_flips_repaired: usize,
+    /// Joint-frames whose shrunken 6D rows were bridged ([`crate::rotation_tracks`]).
+    pub rotations_bridged: usize,
 }
 
 impl SoloModel {
@@ -171,8 +174,11 @@ impl SoloModel {
         let n = self.config.pddm.pddm.window;
         // Windows come back normalised; the root's horizontal channels have no mean (they are
         // window-relative), so raw windows can be anchored and placed in metres.
+        // Ill-defined 6D runs are bridged first, so the seams read proper rotations.
+        let bridged = std::cell::Cell::new(0);
         let anchored = |mut w: Vec<f32>, cues: Vec<CuedFrames>| {
             self.to_raw(&mut w);
+            bridged.set(bridged.get() + bridge_short_rows(&mut w, n));
             let c = anchor_windows(&mut w, n, &cues);
             (w, c)
         };
@@ -197,11 +203,22 @@ impl SoloModel {
                 (place_windows(&w, n, n - BOUNDARY_FRAMES), l, 0, c)
             }
             Sampler::Edge => {
-                let (placed, l) = self.edge(music, frames, opts, device, grad_device, hook)?;
+                let (mut placed, l) = self.edge(music, frames, opts, device, grad_device, hook)?;
+                // Overlapping windows, already placed: one track per joint.
+                let t = placed.len() / DIMS;
+                bridged.set(bridge_short_rows(&mut placed, t.max(1)));
                 (placed, l, 0, SeamCorrection::default())
             }
         };
         out.truncate(frames * DIMS);
+        let rotations_bridged = bridged.get();
+        if rotations_bridged > 0 {
+            tracing::info!(
+                joint_frames = rotations_bridged,
+                "bridged generated joint rotations whose 6D rows had shrunk below {}",
+                dancegen_motion::rot6d_track::MIN_ROW_LENGTH
+            );
+        }
         let root_flips_repaired = crate::root_flips::repair_root_flips(&mut out);
         if root_flips_repaired > 0 {
             tracing::info!(
@@ -228,6 +245,7 @@ impl SoloModel {
             key_motions,
             seam_correction,
             root_flips_repaired,
+            rotations_bridged,
         })
     }
 

@@ -115,6 +115,13 @@ impl DanceSystem for Solo {
         );
         let mut motion = to_smpl(&dance.frames)?;
         let mut notes = Vec::new();
+        if dance.rotations_bridged > 0 {
+            notes.push(format!(
+                "{} joint rotations bridged where the model's 6D output shrank towards zero \
+                 (decoding, not part of Lodge++)",
+                dance.rotations_bridged
+            ));
+        }
         if input.options.beat_align {
             let (aligned, a) =
                 align_to_beats(&motion, &beats).map_err(GenerateError::Generation)?;
