@@ -508,3 +508,44 @@ fn humanml263_decoding_bridges_a_turn_through_the_origin() {
         .to_degrees();
     assert!((total - 160.0).abs() < 1e-3, "turned {total}° in all");
 }
+
+/// The same turn through the origin in an EDGE-151 track (the solo, duet and group systems'
+/// layout) decodes as a spread turn too.
+#[test]
+fn edge151_decoding_bridges_a_turn_through_the_origin() {
+    let m = synthetic(40, 11);
+    let mut data = Edge151::encode(&m).unwrap();
+    let t = data.len() / Edge151::DIMS;
+    let joint = 17;
+    let c = Edge151::ROT6D.start + 6 * joint;
+    let (a, b) = (
+        Mat3::from_axis_rotation(0, 0.0).to_6d(),
+        Mat3::from_axis_rotation(0, 160f64.to_radians()).to_6d(),
+    );
+    for f in 0..t {
+        let s = ((f as f64 - 10.0) / 10.0).clamp(0.0, 1.0);
+        for k in 0..6 {
+            data[f * Edge151::DIMS + c + k] = (a[k] * (1.0 - s) + b[k] * s) as f32;
+        }
+    }
+    let sm = Edge151::decode(&data).unwrap();
+    let local = |f: usize| {
+        let p = &sm.poses[(f * 24 + joint) * 3..(f * 24 + joint) * 3 + 3];
+        Mat3::from_axis_angle([p[0], p[1], p[2]].map(f64::from))
+    };
+    let turn = |r: Mat3| {
+        ((r.0[0][0] + r.0[1][1] + r.0[2][2] - 1.0) / 2.0)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    };
+    let largest = (1..t)
+        .map(|f| turn(local(f - 1).transpose().mul(&local(f))))
+        .fold(0.0, f64::max);
+    assert!(
+        largest < 30.0,
+        "the joint turned {largest:.1}° in one frame"
+    );
+    let total = turn(local(0).transpose().mul(&local(t - 1)));
+    assert!((total - 160.0).abs() < 1e-3, "turned {total}° in all");
+}

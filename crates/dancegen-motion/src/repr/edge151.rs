@@ -17,6 +17,7 @@ use super::{ReprError, SmplMotion, check_fps, frames_of};
 use crate::conventions::{
     CANONICAL_FPS, yup_to_zup_point, yup_to_zup_root_mat, zup_to_yup_point, zup_to_yup_root_mat,
 };
+use crate::rot6d_track::decode_6d_track;
 use crate::rotation::Mat3;
 use std::ops::Range;
 
@@ -58,16 +59,39 @@ impl Edge151 {
     }
 
     /// Decodes `(T, 151)` to a Y-up 30-fps motion (contacts are ignored).
+    ///
+    /// Each joint's 6D track is decoded as one ([`decode_6d_track`]): proper rotations, as in
+    /// real data, decode exactly as Gram–Schmidt gives them; a generated run whose rows shrank
+    /// towards the origin is bridged instead of flipping in one frame (logged when it happens).
     pub fn decode(data: &[f32]) -> Result<SmplMotion, ReprError> {
         let t = frames_of("Edge151::decode", data, Self::DIMS)?;
+        let start = Self::ROT6D.start;
+        let mut bridged = 0;
+        let tracks: Vec<Vec<Mat3>> = (0..SMPL_JOINTS)
+            .map(|j| {
+                let track: Vec<[f64; 6]> = data
+                    .chunks_exact(Self::DIMS)
+                    .map(|row| std::array::from_fn(|i| f64::from(row[start + 6 * j + i])))
+                    .collect();
+                let (r, n) = decode_6d_track(&track);
+                bridged += n;
+                r
+            })
+            .collect();
+        if bridged > 0 {
+            tracing::info!(
+                joint_frames = bridged,
+                "bridged joint rotations whose 6D rows had shrunk below {}",
+                crate::rot6d_track::MIN_ROW_LENGTH
+            );
+        }
         let mut poses = Vec::with_capacity(t * POSE_DIMS);
         let mut trans = Vec::with_capacity(t * 3);
-        for row in data.chunks_exact(Self::DIMS) {
+        for (f, row) in data.chunks_exact(Self::DIMS).enumerate() {
             let r = &row[Self::ROOT];
             trans.extend(zup_to_yup_point([r[0], r[1], r[2]].map(f64::from)).map(|v| v as f32));
-            for (j, d) in row[Self::ROT6D].chunks_exact(6).enumerate() {
-                let d: [f64; 6] = std::array::from_fn(|i| d[i] as f64);
-                let mut r = Mat3::from_6d(&d);
+            for (j, track) in tracks.iter().enumerate() {
+                let mut r = track[f];
                 if j == 0 {
                     r = zup_to_yup_root_mat(&r);
                 }
