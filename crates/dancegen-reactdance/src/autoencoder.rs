@@ -10,6 +10,8 @@
 //!
 //! Loss (paper: `λ_kin·L_kinematic + λ_lat·L_latent`): L1 on the features, their velocity and
 //! acceleration, plus a commitment term `‖z_e − sg(Σ_r s_r v̂_r)‖²` on the unmasked quantization.
+//! Our addition, off by default: an L1 loss on the follower's foot velocities
+//! ([`crate::follower_feet`]), and decoder-only fine-tuning ([`LossOptions`]).
 
 use dancegen_motion::repr::DuetFollower;
 use dancegen_nn::burn;
@@ -21,6 +23,7 @@ use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
 use crate::config::HfsqAutoencoderConfig;
+use crate::follower_feet::FollowerFeet;
 
 /// One stream's encoder, quantizer and decoder.
 #[derive(Module, Debug)]
@@ -47,6 +50,33 @@ pub struct AutoencoderLosses {
     pub velocity: Tensor<1>,
     pub acceleration: Tensor<1>,
     pub latent: Tensor<1>,
+    /// The foot velocity loss, when [`LossOptions::feet`] is given and weighted.
+    pub foot_velocity: Option<Tensor<1>>,
+}
+
+/// Training choices beyond the paper's loss.
+#[derive(Clone, Debug)]
+pub struct LossOptions {
+    /// The follower's feet, for the foot velocity loss
+    /// ([`HfsqAutoencoderConfig::foot_velocity_weight`]).
+    pub feet: Option<FollowerFeet>,
+    /// Frame rate of the features (the loss is in m/s).
+    pub fps: f64,
+    /// Train the decoders only: the levels come from this autoencoder's encoders and
+    /// quantizers (on `dancegen_nn::device::inference()`), the model's own are not used, and the
+    /// commitment term is left out (fine-tuning a shipped autoencoder under a trained latent
+    /// model, whose latent must stay as it is).
+    pub frozen_latent: Option<HfsqAutoencoder>,
+}
+
+impl Default for LossOptions {
+    fn default() -> Self {
+        Self {
+            feet: None,
+            fps: dancegen_motion::conventions::CANONICAL_FPS,
+            frozen_latent: None,
+        }
+    }
 }
 
 impl HfsqAutoencoderConfig {
@@ -94,27 +124,55 @@ impl HfsqAutoencoder {
     }
 
     /// Reconstruction `[B, T, 151]` of normalised follower features (training: masked levels)
-    /// and the losses against the input.
+    /// and the losses against the input, with the paper's terms only.
     pub fn loss(
         &self,
         x: Tensor<3>,
         cfg: &HfsqAutoencoderConfig,
     ) -> (Tensor<3>, AutoencoderLosses) {
+        self.loss_with(x, cfg, &LossOptions::default())
+    }
+
+    /// [`Self::loss`] with our additions ([`LossOptions`]).
+    pub fn loss_with(
+        &self,
+        x: Tensor<3>,
+        cfg: &HfsqAutoencoderConfig,
+        opts: &LossOptions,
+    ) -> (Tensor<3>, AutoencoderLosses) {
         let mut outs = Vec::with_capacity(self.streams.len());
         let mut latent = None::<Tensor<1>>;
+        let device = x.device();
         for (s, codec) in self.streams.iter().enumerate() {
-            let z = codec.encoder.forward(stream_input(&x, s));
-            let (levels, _) = codec.quantizer.residual_levels(z.clone());
-            let sum = levels
-                .iter()
-                .cloned()
-                .reduce(|a, b| a + b)
-                .expect("at least one level");
-            let commit = loss::commitment(z, sum);
-            latent = Some(match latent {
-                Some(l) => l + commit,
-                None => commit,
-            });
+            let levels = match &opts.frozen_latent {
+                Some(frozen) => {
+                    // The levels of the frozen copy, computed off the graph: nothing of this
+                    // model's encoder or quantizer is used, so nothing of it is differentiated
+                    // (tracked encoder work whose outputs were detached stayed in the autodiff
+                    // graph and grew the process by ~25 MB a step).
+                    let f = &frozen.streams[s];
+                    let xi = stream_input(&x, s)
+                        .detach()
+                        .to_device(&dancegen_nn::device::inference());
+                    let (levels, _) = f.quantizer.residual_levels(f.encoder.forward(xi));
+                    levels.into_iter().map(|l| l.to_device(&device)).collect()
+                }
+                None => {
+                    let z = codec.encoder.forward(stream_input(&x, s));
+                    let (levels, _) = codec.quantizer.residual_levels(z.clone());
+                    let sum = levels
+                        .iter()
+                        .cloned()
+                        .reduce(|a, b| a + b)
+                        .expect("at least one level");
+                    let commit = loss::commitment(z, sum);
+                    latent = Some(match latent {
+                        Some(l) => l + commit,
+                        None => commit,
+                    });
+                    levels
+                }
+            };
             let masked = codec.quantizer.mask_levels(levels);
             let q = masked.into_iter().reduce(|a, b| a + b).expect("levels");
             outs.push(codec.decoder.forward(q));
@@ -122,12 +180,26 @@ impl HfsqAutoencoder {
         let recon = Tensor::cat(outs, 2);
         let position = loss::reconstruction(recon.clone(), x.clone(), Distance::L1);
         let velocity = loss::velocity(recon.clone(), x.clone(), Distance::L1);
-        let acceleration = loss::acceleration(recon.clone(), x, Distance::L1);
-        let latent = latent.expect("three streams");
-        let total = position.clone() * cfg.position_weight
+        let acceleration = loss::acceleration(recon.clone(), x.clone(), Distance::L1);
+        let mut total = position.clone() * cfg.position_weight
             + velocity.clone() * cfg.velocity_weight
-            + acceleration.clone() * cfg.acceleration_weight
-            + latent.clone() * cfg.latent_weight;
+            + acceleration.clone() * cfg.acceleration_weight;
+        // Frozen: no commitment term (the encoders are not trained); logged as 0.
+        let latent = match latent {
+            Some(l) => {
+                total = total + l.clone() * cfg.latent_weight;
+                l
+            }
+            None => Tensor::zeros([1], &device),
+        };
+        let foot_velocity = match &opts.feet {
+            Some(feet) if cfg.foot_velocity_weight > 0.0 => {
+                let l = feet.velocity_loss(recon.clone(), x, opts.fps);
+                total = total + l.clone() * cfg.foot_velocity_weight;
+                Some(l)
+            }
+            _ => None,
+        };
         (
             recon,
             AutoencoderLosses {
@@ -136,6 +208,7 @@ impl HfsqAutoencoder {
                 velocity,
                 acceleration,
                 latent,
+                foot_velocity,
             },
         )
     }

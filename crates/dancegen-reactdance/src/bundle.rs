@@ -49,6 +49,28 @@ pub struct BundleConfig {
     pub sampling: SamplingDefaults,
 }
 
+impl BundleConfig {
+    /// Reads and checks a bundle's `model.toml`.
+    pub fn load(p: &Path) -> Result<Self, BundleError> {
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| invalid(p, format!("{e} (is it a model directory?)")))?;
+        let config: BundleConfig = toml::from_str(&text).map_err(|e| invalid(p, e.message()))?;
+        if config.kind != KIND {
+            return Err(invalid(
+                p,
+                format!("kind {:?} is not a duet model ({KIND:?})", config.kind),
+            ));
+        }
+        config
+            .autoencoder
+            .validate()
+            .and_then(|_| config.denoiser.validate())
+            .and_then(|_| config.sampling.validate())
+            .map_err(|r| invalid(p, r))?;
+        Ok(config)
+    }
+}
+
 /// `normalizer.json` (mean / std of the 371 training channels).
 pub use dancegen_motion::repr::normalizer::MeanStdNormalizer as MeanStd;
 
@@ -79,22 +101,7 @@ pub struct DuetModel {
 impl DuetModel {
     /// Reads the bundle in `dir` onto `device` (a plain inference device).
     pub fn load(dir: &Path, device: &Device) -> Result<Self, BundleError> {
-        let p = dir.join(files::MODEL_TOML);
-        let text = std::fs::read_to_string(&p)
-            .map_err(|e| invalid(&p, format!("{e} (is it a model directory?)")))?;
-        let config: BundleConfig = toml::from_str(&text).map_err(|e| invalid(&p, e.message()))?;
-        if config.kind != KIND {
-            return Err(invalid(
-                &p,
-                format!("kind {:?} is not a duet model ({KIND:?})", config.kind),
-            ));
-        }
-        config
-            .autoencoder
-            .validate()
-            .and_then(|_| config.denoiser.validate())
-            .and_then(|_| config.sampling.validate())
-            .map_err(|r| invalid(&p, r))?;
+        let config = BundleConfig::load(&dir.join(files::MODEL_TOML))?;
         let need = |name: &str| -> Result<PathBuf, BundleError> {
             let f = dir.join(name);
             if f.is_file() {

@@ -43,6 +43,9 @@ pub struct HfsqAutoencoderConfig {
     pub acceleration_weight: f64,
     /// Latent (commitment) loss weight.
     pub latent_weight: f64,
+    /// Weight of the foot velocity loss (`crate::follower_feet`; m/s). Not in the paper:
+    /// our addition, 0 (off) unless a configuration sets it.
+    pub foot_velocity_weight: f64,
 }
 
 impl Default for HfsqAutoencoderConfig {
@@ -61,6 +64,7 @@ impl Default for HfsqAutoencoderConfig {
             velocity_weight: 1.0,
             acceleration_weight: 0.5,
             latent_weight: 0.02,
+            foot_velocity_weight: 0.0,
         }
     }
 }
@@ -85,6 +89,18 @@ impl HfsqAutoencoderConfig {
         frames_per_token(self.down_t)
     }
 
+    /// The same network and latent (every field but the training-only loss weights and
+    /// masking probabilities): weights of one load into the other, and a latent model trained on
+    /// one reads the other's latent.
+    pub fn same_architecture(&self, other: &Self) -> bool {
+        self.width == other.width
+            && self.depth == other.depth
+            && self.down_t == other.down_t
+            && self.groups == other.groups
+            && self.levels == other.levels
+            && self.num_levels == other.num_levels
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         if self.levels.is_empty() || self.levels.iter().any(|&l| l < 2) {
             return Err("autoencoder.levels: every FSQ level count must be ≥ 2".into());
@@ -94,6 +110,12 @@ impl HfsqAutoencoderConfig {
         }
         if self.down_t == 0 || self.down_t > 4 {
             return Err("autoencoder.down_t must be 1..=4".into());
+        }
+        if !(self.foot_velocity_weight.is_finite() && self.foot_velocity_weight >= 0.0) {
+            return Err(format!(
+                "autoencoder.foot_velocity_weight must be a number ≥ 0, not {}",
+                self.foot_velocity_weight
+            ));
         }
         Ok(())
     }
@@ -172,6 +194,9 @@ pub struct LatentLossWeights {
     /// Foot contact: velocity of the decoded feet (pelvis frame plus the relative root motion)
     /// on the real follower's contact frames.
     pub foot_contact: f64,
+    /// Foot velocity (ours, not in the paper; 0 = off): L1 between the decoded and the real
+    /// follower's world foot velocities in m/s (`crate::follower_feet`).
+    pub foot_velocity: f64,
     /// Independent condition dropout per level (LDCFG training), paper: 0.2.
     pub cond_drop: f64,
 }
@@ -183,6 +208,7 @@ impl Default for LatentLossWeights {
             kinematic: 0.5,
             relative_orientation: 0.5,
             foot_contact: 0.5,
+            foot_velocity: 0.0,
             cond_drop: 0.2,
         }
     }

@@ -6,6 +6,7 @@
 //! follower):
 //! - [`autoencoder`]: the HFSQ autoencoder over the follower's three streams (upper body, lower
 //!   body, root relative to the leader; `dancegen_motion::repr::duet`), with progressive masking;
+//! - [`follower_feet`]: the follower's feet from its features, for the autoencoder's foot loss;
 //! - [`denoiser`]: the latent diffusion transformer, leader by cross-attention, music by FiLM;
 //! - [`blc`]: Blocked Local Context sampling (all blocks in parallel, phase-aligned positions)
 //!   with layer-wise decoupled guidance, and the autoregressive ablation;
@@ -20,5 +21,6 @@ pub mod blc;
 pub mod bundle;
 pub mod config;
 pub mod denoiser;
+pub mod follower_feet;
 pub mod pipeline;
 pub mod training;

@@ -15,7 +15,9 @@
 //!   follower's orientation in the leader's heading frame;
 //! - foot contact: on frames where the real follower's foot is planted, the velocity of the
 //!   decoded lower-body and relative-root channels. The contact channels are normalised 0/1
-//!   labels, so "planted" is the upper of the two values the batch holds for a channel.
+//!   labels, so "planted" is the upper of the two values the batch holds for a channel;
+//! - foot velocity (ours, off unless weighted): the decoded follower's world foot velocities
+//!   against the real ones ([`crate::follower_feet`]).
 
 use dancegen_motion::repr::{DuetFollower, DuetLeader};
 use dancegen_nn::burn;
@@ -27,6 +29,7 @@ use burn::tensor::{Device, Int, Tensor, TensorData};
 use crate::autoencoder::HfsqAutoencoder;
 use crate::config::{LatentLossWeights, frames_per_token};
 use crate::denoiser::{DuetCond, LatentDenoiser, Layout};
+use crate::follower_feet::FollowerFeet;
 
 /// Channels per frame of the `duet` training representation.
 pub const PAIR_DIMS: usize = DuetFollower::DIMS + DuetLeader::DIMS;
@@ -78,6 +81,7 @@ pub fn ldm_loss(
     weights: &LatentLossWeights,
     down_t: usize,
     seed: u64,
+    feet: Option<&FollowerFeet>,
 ) -> LdmLosses {
     let device = motion.device();
     let f = frames_per_token(down_t);
@@ -188,19 +192,23 @@ pub fn ldm_loss(
     .mean();
     let foot = foot_contact_loss(&decoded, &x);
 
-    let total = latent.clone()
+    let mut total = latent.clone()
         + kinematic.clone() * weights.kinematic
         + rel_orient.clone() * weights.relative_orientation
         + foot.clone() * weights.foot_contact;
-    LdmLosses {
-        total,
-        parts: vec![
-            ("latent", latent),
-            ("kinematic", kinematic),
-            ("relative_orientation", rel_orient),
-            ("foot_contact", foot),
-        ],
+    let mut parts = vec![
+        ("latent", latent),
+        ("kinematic", kinematic),
+        ("relative_orientation", rel_orient),
+        ("foot_contact", foot),
+    ];
+    if let Some(feet) = feet.filter(|_| weights.foot_velocity > 0.0) {
+        let fps = dancegen_motion::conventions::CANONICAL_FPS;
+        let l = feet.velocity_loss(decoded, x, fps);
+        total = total + l.clone() * weights.foot_velocity;
+        parts.push(("foot_velocity", l));
     }
+    LdmLosses { total, parts }
 }
 
 /// Velocity of the decoded lower-body rotations and relative root position on the real
