@@ -300,7 +300,8 @@ pub struct BundleArgs {
     /// Finished `reactdance_hfsq` run directory (duet model).
     #[arg(long, value_name = "RUN", requires = "ldm")]
     pub hfsq: Option<PathBuf>,
-    /// Finished `reactdance_ldm` run directory (duet model).
+    /// Finished `reactdance_ldm` run directory (duet model), or a duet model directory: its
+    /// latent model, normaliser and sampling settings are kept, its autoencoder replaced.
     #[arg(long, value_name = "RUN", requires = "hfsq")]
     pub ldm: Option<PathBuf>,
     /// Finished `tcdiffpp_group` run directory (group model).

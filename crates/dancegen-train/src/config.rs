@@ -99,7 +99,7 @@ fn default_keep_checkpoints() -> usize {
 }
 
 /// `[model]` keys that hold paths (resolved like `[data] paths`).
-pub const MODEL_PATH_KEYS: &[&str] = &["vqvae", "hfsq", "vq", "mmr"];
+pub const MODEL_PATH_KEYS: &[&str] = &["vqvae", "hfsq", "vq", "mmr", "init_from"];
 
 /// Per-frame vector the motion files are converted to (`dancegen_motion::repr`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

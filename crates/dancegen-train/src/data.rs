@@ -113,6 +113,28 @@ impl Normalizer {
         })
     }
 
+    /// Same kind and dimensions, every statistic within `tol` (relative to its size, at
+    /// least 1): a model trained with `other` reads this normaliser's units.
+    pub fn approx_eq(&self, other: &Normalizer, tol: f64) -> bool {
+        let close = |a: &[f64], b: &[f64]| {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| (x - y).abs() <= tol * x.abs().max(y.abs()).max(1.0))
+        };
+        match (self, other) {
+            (
+                Normalizer::MeanStd { mean: m1, std: s1 },
+                Normalizer::MeanStd { mean: m2, std: s2 },
+            ) => close(m1, m2) && close(s1, s2),
+            (Normalizer::MinMax(a), Normalizer::MinMax(b)) => {
+                a.dims == b.dims && close(&a.min, &b.min) && close(&a.max, &b.max)
+            }
+            (Normalizer::None { dims: a }, Normalizer::None { dims: b }) => a == b,
+            _ => false,
+        }
+    }
+
     pub fn dims(&self) -> usize {
         match self {
             Normalizer::MeanStd { mean, .. } => mean.len(),

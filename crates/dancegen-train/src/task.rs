@@ -35,6 +35,14 @@ pub trait TrainTask {
         self.init(device)
     }
 
+    /// Checks a new run's data against what the task was told to start from (e.g. weights
+    /// trained with another normaliser), before anything is initialised: a clear error instead
+    /// of a model that reads its data in the wrong units.
+    fn check_data(&self, normalizer: &Normalizer) -> Result<(), String> {
+        let _ = normalizer;
+        Ok(())
+    }
+
     /// The loss of `model` on `batch` (`[B, window, dims]`, normalised).
     fn loss(&self, model: &Self::Model, batch: &Batch) -> Losses;
 

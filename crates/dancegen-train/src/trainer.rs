@@ -276,6 +276,11 @@ fn run<T: TrainTask>(
     };
     let data = WindowDataset::new(clips, &config.data, &window_norm, seed)?;
     if ckpt.is_none() {
+        task.check_data(&normalizer)
+            .map_err(|reason| TrainError::Config {
+                path: dir.join(files::CONFIG),
+                reason,
+            })?;
         // The run directory exists (and claims the run) only once the data is known to load.
         let cfg_path = dir.join(files::CONFIG);
         let toml = config.to_toml();

@@ -58,7 +58,7 @@ pub fn train_config(
             opts,
         ),
         reactdance::HFSQ => trainer::train(
-            &reactdance::HfsqTask::from_config(config)
+            &reactdance::HfsqTask::from_config(config, config_path)
                 .map_err(|r| lodgepp::config_error(config_path, r))?,
             config,
             opts,
@@ -122,7 +122,7 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
             opts,
         ),
         reactdance::HFSQ => trainer::resume(
-            &reactdance::HfsqTask::from_config(&config)
+            &reactdance::HfsqTask::from_config(&config, &path)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,

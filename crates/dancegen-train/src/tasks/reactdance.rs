@@ -13,16 +13,17 @@ use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::device;
 use dancegen_nn::diffusion::{BetaSchedule, Schedule};
 use dancegen_nn::weights::{self, Layout};
-use dancegen_reactdance::autoencoder::HfsqAutoencoder;
+use dancegen_reactdance::autoencoder::{HfsqAutoencoder, LossOptions};
 use dancegen_reactdance::config::{
     DenoiserConfig, HfsqAutoencoderConfig, LatentLossWeights, MUSIC_DIMS,
 };
 use dancegen_reactdance::denoiser::LatentDenoiser;
+use dancegen_reactdance::follower_feet::FollowerFeet;
 use dancegen_reactdance::training::{self, follower};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{NormalizerKind, Representation, TrainConfig};
-use crate::data::Batch;
+use crate::data::{Batch, Normalizer};
 use crate::files;
 use crate::task::{Losses, TrainTask};
 
@@ -57,18 +58,72 @@ fn require_duet(config: &TrainConfig, music: bool) -> Result<(), String> {
 pub struct HfsqTable {
     #[serde(default)]
     pub autoencoder: HfsqAutoencoderConfig,
+    /// Start from this autoencoder instead of random weights: a finished `reactdance_hfsq` run
+    /// or a duet bundle (relative to the config file). Its architecture and its normaliser
+    /// must be this run's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_from: Option<PathBuf>,
+    /// Train the decoders only (the encoders and quantizers keep `init_from`'s weights), so a
+    /// latent model trained on that autoencoder stays valid. Needs `init_from`.
+    #[serde(default)]
+    pub decoders_only: bool,
+}
+
+/// The follower's feet with a run's normaliser (`normalizer.json` in the run directory, which
+/// the trainer writes before the first step), read once, for the foot velocity losses.
+#[derive(Debug)]
+struct RunFeet {
+    run_dir: PathBuf,
+    cell: std::sync::OnceLock<FollowerFeet>,
+}
+
+impl RunFeet {
+    fn new(run_dir: PathBuf) -> Self {
+        Self {
+            run_dir,
+            cell: std::sync::OnceLock::new(),
+        }
+    }
+
+    fn get(&self) -> &FollowerFeet {
+        self.cell.get_or_init(|| {
+            let p = self.run_dir.join(files::NORMALIZER);
+            let feet = match Normalizer::load(&p) {
+                Ok(Normalizer::MeanStd { mean, std }) => FollowerFeet::new(&mean, &std),
+                Ok(_) => Err("not a mean/std normaliser".to_string()),
+                Err(e) => Err(e.to_string()),
+            };
+            // The trainer wrote and checked this file before the first step.
+            feet.unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+        })
+    }
+}
+
+fn run_dir_of(config: &TrainConfig, path: &Path) -> PathBuf {
+    if config.run.dir.is_relative() {
+        path.parent()
+            .unwrap_or(Path::new("."))
+            .join(&config.run.dir)
+    } else {
+        config.run.dir.clone()
+    }
 }
 
 /// `reactdance_hfsq`.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct HfsqTask {
     pub table: HfsqTable,
+    /// The run directory: its `normalizer.json` is read for the foot velocity loss.
+    feet: RunFeet,
+    /// `init_from` on the inference device, whose encoders give the latent when
+    /// `decoders_only`.
+    frozen: Option<HfsqAutoencoder>,
 }
 
 impl HfsqTask {
-    pub fn from_config(config: &TrainConfig) -> Result<Self, String> {
+    pub fn from_config(config: &TrainConfig, path: &Path) -> Result<Self, String> {
         require_duet(config, false)?;
-        let table: HfsqTable = toml::Value::Table(config.model_params())
+        let mut table: HfsqTable = toml::Value::Table(config.model_params())
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
         table.autoencoder.validate()?;
@@ -79,7 +134,37 @@ impl HfsqTask {
                 config.data.window
             ));
         }
-        Ok(Self { table })
+        let base = path.parent().unwrap_or(Path::new("."));
+        if let Some(from) = &mut table.init_from
+            && from.is_relative()
+        {
+            *from = base.join(&*from);
+        }
+        if table.decoders_only && table.init_from.is_none() {
+            return Err("[model] decoders_only needs init_from (the autoencoder to keep)".into());
+        }
+        let run_dir = run_dir_of(config, path);
+        let frozen = match (&table.init_from, table.decoders_only) {
+            (Some(from), true) => {
+                Some(read_hfsq_weights(from, &table.autoencoder, &device::inference())?.0)
+            }
+            _ => None,
+        };
+        Ok(Self {
+            table,
+            feet: RunFeet::new(run_dir),
+            frozen,
+        })
+    }
+
+    fn loss_options(&self) -> LossOptions {
+        let feet =
+            (self.table.autoencoder.foot_velocity_weight > 0.0).then(|| self.feet.get().clone());
+        LossOptions {
+            feet,
+            frozen_latent: self.frozen.clone(),
+            ..LossOptions::default()
+        }
     }
 }
 
@@ -94,22 +179,102 @@ impl TrainTask for HfsqTask {
         self.table.autoencoder.init(device)
     }
 
+    fn check_data(&self, normalizer: &Normalizer) -> Result<(), String> {
+        match &self.table.init_from {
+            None => Ok(()),
+            Some(from) => load_initial_hfsq(
+                from,
+                &self.table.autoencoder,
+                normalizer,
+                &device::inference(),
+            )
+            .map(|_| ())
+            .map_err(|e| format!("[model] init_from: {e}")),
+        }
+    }
+
+    fn init_with_data(&self, device: &Device, normalizer: &Normalizer) -> HfsqAutoencoder {
+        match &self.table.init_from {
+            None => self.init(device),
+            // Checked by `check_data` before this is called.
+            Some(from) => load_initial_hfsq(from, &self.table.autoencoder, normalizer, device)
+                .unwrap_or_else(|e| panic!("[model] init_from: {e}")),
+        }
+    }
+
     fn loss(&self, model: &HfsqAutoencoder, batch: &Batch) -> Losses {
-        let (_, l) = model.loss(follower(&batch.motion), &self.table.autoencoder);
+        let (_, l) = model.loss_with(
+            follower(&batch.motion),
+            &self.table.autoencoder,
+            &self.loss_options(),
+        );
+        let mut parts = vec![
+            ("position", l.position),
+            ("velocity", l.velocity),
+            ("acceleration", l.acceleration),
+            ("latent", l.latent),
+        ];
+        if let Some(f) = l.foot_velocity {
+            parts.push(("foot_velocity", f));
+        }
         Losses {
             total: l.total,
-            parts: vec![
-                ("position", l.position),
-                ("velocity", l.velocity),
-                ("acceleration", l.acceleration),
-                ("latent", l.latent),
-            ],
+            parts,
         }
     }
 
     fn model_config(&self) -> toml::Table {
         toml::Table::try_from(&self.table).expect("serialises")
     }
+}
+
+/// The autoencoder an `init_from` names (a `reactdance_hfsq` run or a duet bundle), checked
+/// against this run's architecture and normaliser.
+fn load_initial_hfsq(
+    from: &Path,
+    cfg: &HfsqAutoencoderConfig,
+    normalizer: &Normalizer,
+    device: &Device,
+) -> Result<HfsqAutoencoder, String> {
+    let (ae, norm_path) = read_hfsq_weights(from, cfg, device)?;
+    let theirs = Normalizer::load(&norm_path).map_err(|e| e.to_string())?;
+    if !theirs.approx_eq(normalizer, 1e-4) {
+        return Err(format!(
+            "{}: trained with another normaliser than this run's data gives (rebuild the same \
+             data set, or train from scratch)",
+            norm_path.display()
+        ));
+    }
+    Ok(ae)
+}
+
+/// The weights of the autoencoder in `from` (a `reactdance_hfsq` run or a duet bundle) if its
+/// architecture is `cfg`'s, and the path of its normaliser.
+fn read_hfsq_weights(
+    from: &Path,
+    cfg: &HfsqAutoencoderConfig,
+    device: &Device,
+) -> Result<(HfsqAutoencoder, PathBuf), String> {
+    use dancegen_reactdance::bundle::files as bundle_files;
+    let bundle = from.join(bundle_files::HFSQ);
+    let (their_cfg, weights_path, norm_path) = if bundle.is_file() {
+        let b =
+            dancegen_reactdance::bundle::BundleConfig::load(&from.join(bundle_files::MODEL_TOML))
+                .map_err(|e| e.to_string())?;
+        (b.autoencoder, bundle, from.join(bundle_files::NORMALIZER))
+    } else {
+        let (c, _) = load_hfsq(from, &device::inference())?;
+        (c, from.join(files::WEIGHTS), from.join(files::NORMALIZER))
+    };
+    if !their_cfg.same_architecture(cfg) {
+        return Err(format!(
+            "{}: its autoencoder architecture is not this run's [model.autoencoder]",
+            from.display()
+        ));
+    }
+    let ae = weights::load(cfg.init(device), &weights_path, Layout::Burn)
+        .map_err(|e| format!("{}: {e}", weights_path.display()))?;
+    Ok((ae, norm_path))
 }
 
 /// A finished `reactdance_hfsq` run: its configuration and weights on `device`.
@@ -160,6 +325,7 @@ pub struct LdmTask {
     schedule: Schedule,
     ae_target: HfsqAutoencoder,
     ae_decode: HfsqAutoencoder,
+    feet: RunFeet,
 }
 
 impl LdmTask {
@@ -187,6 +353,7 @@ impl LdmTask {
             table,
             ae_target,
             ae_decode: ae_decode.no_grad(),
+            feet: RunFeet::new(run_dir_of(config, path)),
         })
     }
 }
@@ -219,6 +386,7 @@ impl TrainTask for LdmTask {
             &self.table.weights,
             self.table.autoencoder.down_t,
             batch.seed,
+            (self.table.weights.foot_velocity > 0.0).then(|| self.feet.get()),
         );
         Losses {
             total: l.total,
@@ -233,6 +401,10 @@ impl TrainTask for LdmTask {
 
 /// Writes a duet model directory (`dancegen_reactdance::bundle`) from a finished autoencoder
 /// run and a finished diffusion run trained on it. Weights are stored in half precision.
+///
+/// `ldm_run` may also be a duet model directory: its latent model, normaliser and `[sampling]`
+/// are kept and its autoencoder is replaced by `hfsq_run`'s, which must have the same
+/// architecture and normaliser (a decoder fine-tuned with `[model] decoders_only`, say).
 pub fn assemble_duet_bundle(
     hfsq_run: &Path,
     ldm_run: &Path,
@@ -246,10 +418,16 @@ pub fn assemble_duet_bundle(
         path: p.to_path_buf(),
         reason,
     };
+    if ldm_run
+        .join(dancegen_reactdance::bundle::files::DENOISER)
+        .is_file()
+    {
+        return replace_bundle_autoencoder(hfsq_run, ldm_run, out, name);
+    }
     let table: LdmTable = super::bundle_files::finished_run_config(ldm_run, LDM)?;
     let dev = device::inference();
     let (ae_cfg, ae) = load_hfsq(hfsq_run, &dev).map_err(|r| err(hfsq_run, r))?;
-    if ae_cfg != table.autoencoder {
+    if !ae_cfg.same_architecture(&table.autoencoder) {
         return Err(err(
             hfsq_run,
             format!(
@@ -282,5 +460,65 @@ pub fn assemble_duet_bundle(
         denoiser: table.denoiser,
         sampling: SamplingDefaults::default(),
     };
+    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
+}
+
+/// [`assemble_duet_bundle`] from a duet model directory `bundle` and an autoencoder run.
+fn replace_bundle_autoencoder(
+    hfsq_run: &Path,
+    bundle: &Path,
+    out: &Path,
+    name: &str,
+) -> Result<(), crate::TrainError> {
+    use dancegen_reactdance::bundle::{BundleConfig, files as bundle_files};
+
+    let err = |p: &Path, reason: String| crate::TrainError::Config {
+        path: p.to_path_buf(),
+        reason,
+    };
+    let mt = bundle.join(bundle_files::MODEL_TOML);
+    let mut config = BundleConfig::load(&mt).map_err(|e| err(&mt, e.reason))?;
+    let dev = device::inference();
+    let (ae_cfg, ae) = load_hfsq(hfsq_run, &dev).map_err(|r| err(hfsq_run, r))?;
+    if !ae_cfg.same_architecture(&config.autoencoder) {
+        return Err(err(
+            hfsq_run,
+            format!(
+                "its autoencoder architecture is not the one {} was trained on",
+                bundle.display()
+            ),
+        ));
+    }
+    let theirs = Normalizer::load(&bundle.join(bundle_files::NORMALIZER))?;
+    let ours = Normalizer::load(&hfsq_run.join(files::NORMALIZER))?;
+    if !ours.approx_eq(&theirs, 1e-4) {
+        return Err(err(
+            hfsq_run,
+            format!(
+                "trained with another normaliser than {}'s",
+                bundle.display()
+            ),
+        ));
+    }
+    let denoiser = weights::load(
+        config
+            .denoiser
+            .init(ae_cfg.latent_dim(), ae_cfg.frames_per_token(), &dev),
+        &bundle.join(bundle_files::DENOISER),
+        Layout::Burn,
+    )?;
+    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
+    let f16 = weights::Storage::F16;
+    weights::save_as(&ae, &out.join(bundle_files::HFSQ), Layout::Burn, &[], f16)?;
+    weights::save_as(
+        &denoiser,
+        &out.join(bundle_files::DENOISER),
+        Layout::Burn,
+        &[],
+        f16,
+    )?;
+    super::bundle_files::copy_normalizer(bundle, &out.join(bundle_files::NORMALIZER))?;
+    config.name = name.into();
+    config.autoencoder = ae_cfg;
     super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
 }
