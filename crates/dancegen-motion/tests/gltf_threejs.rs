@@ -48,6 +48,11 @@ new GLTFLoader().load('/model.glb', (g) => {
 </script></body></html>"#;
 
 fn ensure_three() -> PathBuf {
+    // The tests of this file run in parallel threads: two `npm install`s into one prefix on a
+    // fresh target directory make one of them fail (seen on a cold run), so one installs at a
+    // time and the others find the package.
+    static INSTALL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = INSTALL.lock().unwrap_or_else(|e| e.into_inner());
     let prefix = Path::new(env!("CARGO_TARGET_TMPDIR")).join("threejs");
     let module = prefix.join("node_modules/three/build/three.module.js");
     if !module.exists() {
