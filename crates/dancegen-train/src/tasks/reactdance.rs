@@ -411,7 +411,7 @@ pub fn assemble_duet_bundle(
     out: &Path,
     name: &str,
 ) -> Result<(), crate::TrainError> {
-    use dancegen_reactdance::bundle::{BundleConfig, KIND, files as bundle_files};
+    use dancegen_reactdance::bundle::{BundleConfig, KIND};
     use dancegen_reactdance::config::SamplingDefaults;
 
     let err = |p: &Path, reason: String| crate::TrainError::Config {
@@ -443,13 +443,6 @@ pub fn assemble_duet_bundle(
         &ldm_run.join(files::WEIGHTS),
         Layout::Burn,
     )?;
-    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
-    let f16 = weights::Storage::F16;
-    let hp = out.join(bundle_files::HFSQ);
-    weights::save_as(&ae, &hp, Layout::Burn, &[], f16)?;
-    let dp = out.join(bundle_files::DENOISER);
-    weights::save_as(&net, &dp, Layout::Burn, &[], f16)?;
-    super::bundle_files::copy_normalizer(ldm_run, &out.join(bundle_files::NORMALIZER))?;
     let run = crate::trainer::run_config(ldm_run)?;
     let config = BundleConfig {
         kind: KIND.into(),
@@ -460,7 +453,31 @@ pub fn assemble_duet_bundle(
         denoiser: table.denoiser,
         sampling: SamplingDefaults::default(),
     };
-    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
+    write_duet_bundle(&ae, &net, ldm_run, &config, out)
+}
+
+/// Writes a duet model directory: both networks in half precision, the normaliser of the run or
+/// bundle `normalizer_from`, and `config` as `model.toml`.
+fn write_duet_bundle(
+    ae: &HfsqAutoencoder,
+    net: &LatentDenoiser,
+    normalizer_from: &Path,
+    config: &dancegen_reactdance::bundle::BundleConfig,
+    out: &Path,
+) -> Result<(), crate::TrainError> {
+    use dancegen_reactdance::bundle::files as bundle_files;
+    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
+    let f16 = weights::Storage::F16;
+    weights::save_as(ae, &out.join(bundle_files::HFSQ), Layout::Burn, &[], f16)?;
+    weights::save_as(
+        net,
+        &out.join(bundle_files::DENOISER),
+        Layout::Burn,
+        &[],
+        f16,
+    )?;
+    super::bundle_files::copy_normalizer(normalizer_from, &out.join(bundle_files::NORMALIZER))?;
+    super::bundle_files::write_model_toml(config, &out.join(bundle_files::MODEL_TOML))
 }
 
 /// [`assemble_duet_bundle`] from a duet model directory `bundle` and an autoencoder run.
@@ -507,18 +524,7 @@ fn replace_bundle_autoencoder(
         &bundle.join(bundle_files::DENOISER),
         Layout::Burn,
     )?;
-    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
-    let f16 = weights::Storage::F16;
-    weights::save_as(&ae, &out.join(bundle_files::HFSQ), Layout::Burn, &[], f16)?;
-    weights::save_as(
-        &denoiser,
-        &out.join(bundle_files::DENOISER),
-        Layout::Burn,
-        &[],
-        f16,
-    )?;
-    super::bundle_files::copy_normalizer(bundle, &out.join(bundle_files::NORMALIZER))?;
     config.name = name.into();
     config.autoencoder = ae_cfg;
-    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
+    write_duet_bundle(&ae, &denoiser, bundle, &config, out)
 }
