@@ -12,7 +12,9 @@
 //! Indices are `[B, 3T', Q]` for all three: per level the three parts' `[B, T']` indices
 //! concatenated along time (the reference's layout; `Q = 1` for `vq`).
 //!
-//! Loss: `Σ_p w_p · (D_p / D) · recon_p + velocity_weight · velocity + commit_weight · commit`.
+//! Loss: `Σ_p w_p · (D_p / D) · recon_p + velocity_weight · velocity + acceleration_weight ·
+//! acceleration + commit_weight · commit` (the acceleration term is ours, 0 by default: the
+//! released code has none).
 //! With the default part weights `w = (1, 1, 1)` the recon term is the mean over every value,
 //! which is what the released code trains (it weights the parts equally per value; the paper's
 //! α, β, γ are not given). SoulNet's extra 0.5 × SmoothL1 on "positions" `[4:157]` is not
@@ -78,6 +80,9 @@ pub struct PartAutoencoderConfig {
     pub part_weights: [f64; PARTS],
     #[config(default = 0.5)]
     pub velocity_weight: f64,
+    /// Weight of the second differences' distance (not in SoulNet; against a decoder's jitter).
+    #[config(default = 0.0)]
+    pub acceleration_weight: f64,
     #[config(default = 0.02)]
     pub commit_weight: f64,
 }
@@ -118,6 +123,7 @@ impl PartAutoencoderConfig {
             recon: self.recon,
             part_weights: self.part_weights.to_vec(),
             velocity_weight: self.velocity_weight,
+            acceleration_weight: self.acceleration_weight,
             commit_weight: self.commit_weight,
         }
     }
@@ -138,6 +144,8 @@ pub struct PartAutoencoder {
     #[module(skip)]
     pub velocity_weight: f64,
     #[module(skip)]
+    pub acceleration_weight: f64,
+    #[module(skip)]
     pub commit_weight: f64,
 }
 
@@ -148,6 +156,7 @@ pub struct PartAutoencoderLoss {
     /// Per part, in the autoencoder's distance.
     pub recon_parts: [Tensor<1>; PARTS],
     pub velocity: Tensor<1>,
+    pub acceleration: Tensor<1>,
     pub commit: Tensor<1>,
     /// `[B, T, D]`.
     pub reconstruction: Tensor<3>,
@@ -268,7 +277,33 @@ impl PartAutoencoder {
 
     /// Training loss of a batch `[B, T, D]` (see the module documentation).
     pub fn loss(&self, x: Tensor<3>) -> PartAutoencoderLoss {
-        let (reconstruction, quant) = self.forward(x.clone());
+        self.loss_with(x, None)
+    }
+
+    /// [`Self::loss`], or with `frozen` (an autoencoder of the same shape on
+    /// `crate::device::inference()`) the loss of this model's decoder alone on the codes that
+    /// `frozen` gives `x`, without a commitment term: fine-tuning a decoder under a trained
+    /// generator, whose tokens must keep their meaning. The frozen codes are computed off the
+    /// autodiff graph (tracked work whose outputs are detached is never freed by Burn's autodiff).
+    pub fn loss_with(&self, x: Tensor<3>, frozen: Option<&PartAutoencoder>) -> PartAutoencoderLoss {
+        let (reconstruction, quant) = match frozen {
+            None => self.forward(x.clone()),
+            Some(f) => {
+                let device = x.device();
+                let xi = x.clone().detach().to_device(&crate::device::inference());
+                let mut quant = f.quantize(f.encode_parts(xi));
+                quant.quantized = quant.quantized.to_device(&device);
+                quant.indices = quant.indices.to_device(&device);
+                quant.commit_loss = Tensor::zeros([1], &device);
+                quant.perplexity = quant.perplexity.map(|p| p.to_device(&device));
+                quant.levels = quant
+                    .levels
+                    .into_iter()
+                    .map(|l| l.to_device(&device))
+                    .collect();
+                (self.decoder.forward(quant.quantized.clone()), quant)
+            }
+        };
         let off = self.part_offsets();
         let total_dims: usize = self.parts.iter().sum();
         let recon_parts: [Tensor<1>; PARTS] = std::array::from_fn(|p| {
@@ -285,14 +320,18 @@ impl PartAutoencoder {
             })
             .reduce(|a, b| a + b)
             .expect("three parts");
-        let velocity = loss::velocity(reconstruction.clone(), x, self.recon);
+        let velocity = loss::velocity(reconstruction.clone(), x.clone(), self.recon);
+        let acceleration = loss::acceleration(reconstruction.clone(), x, self.recon);
         let commit = quant.commit_loss.clone();
-        let total =
-            recon + velocity.clone() * self.velocity_weight + commit.clone() * self.commit_weight;
+        let total = recon
+            + velocity.clone() * self.velocity_weight
+            + acceleration.clone() * self.acceleration_weight
+            + commit.clone() * self.commit_weight;
         PartAutoencoderLoss {
             total,
             recon_parts,
             velocity,
+            acceleration,
             commit,
             reconstruction,
             quant,

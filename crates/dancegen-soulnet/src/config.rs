@@ -68,8 +68,19 @@ pub struct VqTable {
     pub part_weights: [f64; 3],
     #[serde(default = "d_velocity")]
     pub velocity_weight: f64,
+    /// Training only: weight of the second differences' distance (not in SoulNet; 0 = off).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub acceleration_weight: f64,
+    /// Training only: weight of the body's foot velocity loss in m/s
+    /// ([`crate::body_feet::BodyFeet`]; not in SoulNet; 0 = off).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub foot_velocity_weight: f64,
     #[serde(default = "d_commit")]
     pub commit_weight: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn d_quantizer() -> QuantizerKind {
@@ -143,7 +154,32 @@ impl VqTable {
             .with_recon(self.recon)
             .with_part_weights(self.part_weights)
             .with_velocity_weight(self.velocity_weight)
+            .with_acceleration_weight(self.acceleration_weight)
             .with_commit_weight(self.commit_weight)
+    }
+
+    /// Whether `other`'s weights fit this autoencoder, and its tokens mean the same (the loss
+    /// weights and the EMA decay may differ).
+    pub fn same_architecture(&self, other: &VqTable) -> bool {
+        (
+            self.quantizer,
+            self.num_quantizers,
+            self.nb_code,
+            self.code_dim,
+            self.width,
+            self.depth,
+            self.down_t,
+            self.dilation_growth_rate,
+        ) == (
+            other.quantizer,
+            other.num_quantizers,
+            other.nb_code,
+            other.code_dim,
+            other.width,
+            other.depth,
+            other.down_t,
+            other.dilation_growth_rate,
+        )
     }
 
     /// Token levels per position (1 for `vq`).
@@ -162,6 +198,14 @@ impl VqTable {
     pub fn validate(&self) -> Result<(), String> {
         if self.num_quantizers == 0 || self.nb_code == 0 || self.code_dim == 0 {
             return Err("[vq] num_quantizers, nb_code and code_dim must be positive".into());
+        }
+        for (name, w) in [
+            ("acceleration_weight", self.acceleration_weight),
+            ("foot_velocity_weight", self.foot_velocity_weight),
+        ] {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(format!("[vq] {name} {w} must be a finite value ≥ 0"));
+            }
         }
         Ok(())
     }
@@ -344,6 +388,11 @@ pub struct SamplingDefaults {
     /// Tokens per part carried over from the previous window and inpainted (ours: SoulNet has
     /// no long form).
     pub overlap_tokens: usize,
+    /// Post-processing (ours, not SoulNet's), with the foot lock: after the root lock, also pin
+    /// each planted foot by leg IK at its contact run's mean place
+    /// (`dancegen_lodgepp::planted_feet`). `false` keeps the root lock alone. Absent in older
+    /// bundles: `true`, as they shipped.
+    pub foot_ik: bool,
 }
 
 impl Default for SamplingDefaults {
@@ -356,6 +405,7 @@ impl Default for SamplingDefaults {
             residual_cond_scale: 5.0,
             residual_temperature: 0.8,
             overlap_tokens: 8,
+            foot_ik: true,
         }
     }
 }

@@ -9,10 +9,12 @@
 //! - [`generator`]: masked + residual transformers over the part tokens, conditioned on that
 //!   embedding and on the music of each token's frames;
 //! - [`pipeline`]: music of any length → tokens window by window (inpainting the overlap) →
-//!   holistic frames; [`bundle`]: the model on disk.
+//!   holistic frames; [`bundle`]: the model on disk;
+//! - [`body_feet`]: the feet's velocities from the rows, for the autoencoder's foot loss.
 //!
 //! The hands and faces of the shipped model are synthetic (`docs/holistic-data.md`).
 
+pub mod body_feet;
 pub mod bundle;
 pub mod config;
 pub mod generator;

@@ -1,5 +1,6 @@
 //! The holistic part autoencoder (`[model] kind = "soulnet_vq"`) trains on a real AIST++ body
-//! with hands and a face from `[data] holistic`; bad hands/face files are named in the error.
+//! with hands and a face from `[data] holistic`; bad hands/face files are named in the error; its
+//! decoder alone is fine-tuned from a finished run with the foot velocity loss.
 
 mod common;
 
@@ -85,7 +86,7 @@ fn soulnet_vq_trains_for_every_quantizer_kind() {
     for kind in ["hrvq", "rvq", "vq"] {
         let run = dir.path().join(kind);
         let c = config(&run, &hol, kind);
-        let task = SoulnetVqTask::from_config(&c).unwrap();
+        let task = SoulnetVqTask::from_config(&c, &run.join("config.toml")).unwrap();
         assert_eq!(task.kind(), "soulnet_vq");
         let summary = dancegen_train::tasks::train_config(&c, &run.join("config.toml"), &quiet())
             .unwrap_or_else(|e| panic!("{kind}: {e}"));
@@ -100,7 +101,7 @@ fn soulnet_vq_trains_for_every_quantizer_kind() {
         );
     }
     assert_eq!(
-        SoulnetVqTask::from_config(&config(&dir.path().join("x"), &hol, "vq"))
+        SoulnetVqTask::from_config(&config(&dir.path().join("x"), &hol, "vq"), dir.path())
             .unwrap()
             .table
             .quantizer,
@@ -134,8 +135,80 @@ fn bad_hands_or_face_files_are_named() {
     let mut c = config(&run, &hol, "hrvq");
     c.data.representation = dancegen_train::config::Representation::Edge151;
     assert!(
-        SoulnetVqTask::from_config(&c)
+        SoulnetVqTask::from_config(&c, &run.join("config.toml"))
             .unwrap_err()
             .contains("holistic")
     );
+}
+
+/// The tensors of a safetensors file whose names start with `prefix`, as raw bytes.
+fn tensors(path: &Path, prefix: &str) -> Vec<(String, Vec<u8>)> {
+    let bytes = std::fs::read(path).unwrap();
+    let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let mut out: Vec<(String, Vec<u8>)> = st
+        .tensors()
+        .into_iter()
+        .filter(|(n, _)| n.starts_with(prefix))
+        .map(|(n, v)| (n, v.data().to_vec()))
+        .collect();
+    out.sort();
+    assert!(!out.is_empty(), "no {prefix} tensors in {}", path.display());
+    out
+}
+
+#[test]
+fn a_decoder_fine_tune_keeps_the_tokens_and_learns_the_feet() {
+    let dir = tempfile::tempdir().unwrap();
+    let hol = dir.path().join("holistic");
+    std::fs::create_dir_all(&hol).unwrap();
+    write_holistic(&hol, FRAMES);
+    let base = dir.path().join("base");
+    let c = config(&base, &hol, "hrvq");
+    dancegen_train::tasks::train_config(&c, &base.join("config.toml"), &quiet()).unwrap();
+
+    let add = |c: &mut TrainConfig, extra: &str| {
+        let t: toml::Table = toml::from_str(extra).unwrap();
+        c.model.extend(t);
+    };
+    let tuned = dir.path().join("tuned");
+    let mut c = config(&tuned, &hol, "hrvq");
+    add(
+        &mut c,
+        &format!(
+            "init_from = \"{}\"\ndecoders_only = true\nfoot_velocity_weight = 1.0\nacceleration_weight = 0.5",
+            base.display()
+        ),
+    );
+    dancegen_train::tasks::train_config(&c, &tuned.join("config.toml"), &quiet()).unwrap();
+    let log = std::fs::read_to_string(tuned.join("log.csv")).unwrap();
+    let header = log.lines().next().unwrap();
+    assert!(
+        header.contains("foot_velocity") && header.contains("acceleration"),
+        "{header}"
+    );
+    // The encoders and the quantizer are the base run's, bit for bit; the decoder moved.
+    let (a, b) = (
+        base.join("model.safetensors"),
+        tuned.join("model.safetensors"),
+    );
+    for part in ["encoders", "quantizer"] {
+        assert_eq!(tensors(&a, part), tensors(&b, part), "{part}");
+    }
+    assert_ne!(tensors(&a, "decoder"), tensors(&b, "decoder"));
+
+    // What cannot start: decoders_only alone, another architecture, a missing run.
+    let mut c = config(&dir.path().join("x"), &hol, "hrvq");
+    add(&mut c, "decoders_only = true");
+    let e = SoulnetVqTask::from_config(&c, dir.path()).unwrap_err();
+    assert!(e.contains("init_from"), "{e}");
+    let mut c = config(&dir.path().join("x"), &hol, "rvq");
+    add(&mut c, &format!("init_from = \"{}\"", base.display()));
+    let e = dancegen_train::tasks::train_config(&c, &dir.path().join("x/config.toml"), &quiet())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("architecture") && e.contains("base"), "{e}");
+    let mut c = config(&dir.path().join("x"), &hol, "hrvq");
+    add(&mut c, "init_from = \"no-such-run\"\ndecoders_only = true");
+    let e = SoulnetVqTask::from_config(&c, &dir.path().join("config.toml")).unwrap_err();
+    assert!(e.contains("no-such-run"), "{e}");
 }

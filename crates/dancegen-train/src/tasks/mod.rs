@@ -10,6 +10,7 @@ pub mod bundle_files;
 pub mod lodgepp;
 pub mod motion_autoencoder;
 pub mod reactdance;
+mod run_feet;
 pub mod soulnet;
 pub mod tcdiffpp;
 
@@ -76,7 +77,7 @@ pub fn train_config(
             opts,
         ),
         soulnet::KIND => trainer::train(
-            &soulnet::SoulnetVqTask::from_config(config)
+            &soulnet::SoulnetVqTask::from_config(config, config_path)
                 .map_err(|r| lodgepp::config_error(config_path, r))?,
             config,
             opts,
@@ -140,7 +141,7 @@ pub fn resume_run(run_dir: &Path, opts: &RunOptions) -> Result<RunSummary, Train
             opts,
         ),
         soulnet::KIND => trainer::resume(
-            &soulnet::SoulnetVqTask::from_config(&config)
+            &soulnet::SoulnetVqTask::from_config(&config, &path)
                 .map_err(|r| lodgepp::config_error(&path, r))?,
             run_dir,
             opts,

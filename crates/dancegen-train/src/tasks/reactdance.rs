@@ -22,6 +22,7 @@ use dancegen_reactdance::follower_feet::FollowerFeet;
 use dancegen_reactdance::training::{self, follower};
 use serde::{Deserialize, Serialize};
 
+use super::run_feet::{RunFeet, run_dir_of};
 use crate::config::{NormalizerKind, Representation, TrainConfig};
 use crate::data::{Batch, Normalizer};
 use crate::files;
@@ -69,52 +70,12 @@ pub struct HfsqTable {
     pub decoders_only: bool,
 }
 
-/// The follower's feet with a run's normaliser (`normalizer.json` in the run directory, which
-/// the trainer writes before the first step), read once, for the foot velocity losses.
-#[derive(Debug)]
-struct RunFeet {
-    run_dir: PathBuf,
-    cell: std::sync::OnceLock<FollowerFeet>,
-}
-
-impl RunFeet {
-    fn new(run_dir: PathBuf) -> Self {
-        Self {
-            run_dir,
-            cell: std::sync::OnceLock::new(),
-        }
-    }
-
-    fn get(&self) -> &FollowerFeet {
-        self.cell.get_or_init(|| {
-            let p = self.run_dir.join(files::NORMALIZER);
-            let feet = match Normalizer::load(&p) {
-                Ok(Normalizer::MeanStd { mean, std }) => FollowerFeet::new(&mean, &std),
-                Ok(_) => Err("not a mean/std normaliser".to_string()),
-                Err(e) => Err(e.to_string()),
-            };
-            // The trainer wrote and checked this file before the first step.
-            feet.unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-        })
-    }
-}
-
-fn run_dir_of(config: &TrainConfig, path: &Path) -> PathBuf {
-    if config.run.dir.is_relative() {
-        path.parent()
-            .unwrap_or(Path::new("."))
-            .join(&config.run.dir)
-    } else {
-        config.run.dir.clone()
-    }
-}
-
 /// `reactdance_hfsq`.
 #[derive(Debug)]
 pub struct HfsqTask {
     pub table: HfsqTable,
     /// The run directory: its `normalizer.json` is read for the foot velocity loss.
-    feet: RunFeet,
+    feet: RunFeet<FollowerFeet>,
     /// `init_from` on the inference device, whose encoders give the latent when
     /// `decoders_only`.
     frozen: Option<HfsqAutoencoder>,
@@ -152,7 +113,7 @@ impl HfsqTask {
         };
         Ok(Self {
             table,
-            feet: RunFeet::new(run_dir),
+            feet: RunFeet::new(run_dir, FollowerFeet::new),
             frozen,
         })
     }
@@ -325,7 +286,7 @@ pub struct LdmTask {
     schedule: Schedule,
     ae_target: HfsqAutoencoder,
     ae_decode: HfsqAutoencoder,
-    feet: RunFeet,
+    feet: RunFeet<FollowerFeet>,
 }
 
 impl LdmTask {
@@ -353,7 +314,7 @@ impl LdmTask {
             table,
             ae_target,
             ae_decode: ae_decode.no_grad(),
-            feet: RunFeet::new(run_dir_of(config, path)),
+            feet: RunFeet::new(run_dir_of(config, path), FollowerFeet::new),
         })
     }
 }

@@ -31,10 +31,12 @@ pub use dancegen_soulnet::config::{QuantizerKind, VqTable};
 /// The `soulnet_vq` `[model]` table (kept under its first name).
 pub type SoulnetVqTable = VqTable;
 
+use super::run_feet::{RunFeet, run_dir_of};
 use crate::config::{Representation, TrainConfig};
-use crate::data::Batch;
+use crate::data::{Batch, Normalizer};
 use crate::files;
 use crate::task::{Losses, TrainTask};
+use dancegen_soulnet::body_feet::BodyFeet;
 
 /// `[model] kind` of the part autoencoder.
 pub const KIND: &str = "soulnet_vq";
@@ -73,16 +75,56 @@ fn batch_music(batch: &Batch) -> Tensor<3> {
         .expect("[data.music] is required (checked when the task is built)")
 }
 
-/// See the module documentation.
-#[derive(Clone, Debug)]
+/// `soulnet_vq`: the part autoencoder, from scratch or (`[model] init_from`) from a finished
+/// `soulnet_vq` run or a holistic bundle, optionally training its decoder alone
+/// (`decoders_only`), so that a generator trained on its tokens stays valid. With
+/// `foot_velocity_weight > 0` the body's foot velocities
+/// ([`dancegen_soulnet::body_feet::BodyFeet`]) join the loss.
+#[derive(Debug)]
 pub struct SoulnetVqTask {
     pub table: VqTable,
+    /// The autoencoder to start from (absolute, or relative to the working directory once
+    /// built; the config gives it relative to the config file).
+    pub init_from: Option<PathBuf>,
+    /// Train the decoder only: the encoders and quantizer keep `init_from`'s weights.
+    pub decoders_only: bool,
+    fps: f64,
+    /// `init_from` on the inference device, whose codes the decoder learns from when
+    /// `decoders_only`.
+    frozen: Option<PartAutoencoder>,
+    feet: RunFeet<BodyFeet>,
 }
 
+/// The `[model]` keys of `soulnet_vq` that are not the autoencoder's [`VqTable`].
+const START_KEYS: [&str; 2] = ["init_from", "decoders_only"];
+
 impl SoulnetVqTask {
-    pub fn from_config(config: &TrainConfig) -> Result<Self, String> {
+    /// `path` is the config file (relative paths in it are relative to its folder).
+    pub fn from_config(config: &TrainConfig, path: &Path) -> Result<Self, String> {
         require_holistic(config, KIND)?;
-        let table: VqTable = toml::Value::Table(config.model_params())
+        let mut params = config.model_params();
+        let init_from = match params.remove(START_KEYS[0]) {
+            None => None,
+            Some(toml::Value::String(p)) => {
+                let p = PathBuf::from(p);
+                Some(if p.is_relative() {
+                    path.parent().unwrap_or(Path::new(".")).join(p)
+                } else {
+                    p
+                })
+            }
+            Some(v) => return Err(format!("[model] init_from must be a path, not {v}")),
+        };
+        let decoders_only = match params.remove(START_KEYS[1]) {
+            None => false,
+            Some(toml::Value::Boolean(b)) => b,
+            Some(v) => {
+                return Err(format!(
+                    "[model] decoders_only must be true or false, not {v}"
+                ));
+            }
+        };
+        let table: VqTable = toml::Value::Table(params)
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
         let down = table.frames_per_token();
@@ -93,8 +135,57 @@ impl SoulnetVqTask {
             ));
         }
         table.validate().map_err(|r| r.replace("[vq]", "[model]"))?;
-        Ok(Self { table })
+        if decoders_only && init_from.is_none() {
+            return Err("[model] decoders_only needs init_from (the autoencoder to keep)".into());
+        }
+        let frozen = match (&init_from, decoders_only) {
+            (Some(from), true) => Some(read_vq_weights(from, &table, &device::inference())?.0),
+            _ => None,
+        };
+        Ok(Self {
+            table,
+            init_from,
+            decoders_only,
+            fps: f64::from(config.data.fps),
+            frozen,
+            feet: RunFeet::new(run_dir_of(config, path), BodyFeet::new),
+        })
     }
+}
+
+/// The part autoencoder in `from` (a `soulnet_vq` run or a holistic bundle) if its
+/// architecture is `table`'s, and the path of its normaliser.
+fn read_vq_weights(
+    from: &Path,
+    table: &VqTable,
+    device: &Device,
+) -> Result<(PartAutoencoder, PathBuf), String> {
+    use dancegen_soulnet::bundle::{BundleConfig, files as bundle_files};
+    let bundle = from.join(bundle_files::VQ);
+    let (theirs, weights_path, norm_path) = if bundle.is_file() {
+        let p = from.join(bundle_files::MODEL_TOML);
+        let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+        let b: BundleConfig =
+            toml::from_str(&text).map_err(|e| format!("{}: {}", p.display(), e.message()))?;
+        (b.vq, bundle, from.join(bundle_files::NORMALIZER))
+    } else {
+        let t: VqTable = super::bundle_files::finished_run_config(from, KIND)
+            .map_err(|e| format!("{e} (init_from names a {KIND} run or a holistic model)"))?;
+        (t, from.join(files::WEIGHTS), from.join(files::NORMALIZER))
+    };
+    if !theirs.same_architecture(table) {
+        return Err(format!(
+            "{}: its part autoencoder's architecture is not this run's [model]",
+            from.display()
+        ));
+    }
+    let ae = weights::load(
+        table.autoencoder().init(device),
+        &weights_path,
+        Layout::Burn,
+    )
+    .map_err(|e| format!("{}: {e}", weights_path.display()))?;
+    Ok((ae, norm_path))
 }
 
 impl TrainTask for SoulnetVqTask {
@@ -108,23 +199,59 @@ impl TrainTask for SoulnetVqTask {
         self.table.autoencoder().init(device)
     }
 
+    fn check_data(&self, normalizer: &Normalizer) -> Result<(), String> {
+        let Some(from) = &self.init_from else {
+            return Ok(());
+        };
+        let (_, norm_path) = read_vq_weights(from, &self.table, &device::inference())
+            .map_err(|e| format!("[model] init_from: {e}"))?;
+        let theirs = Normalizer::load(&norm_path).map_err(|e| format!("[model] init_from: {e}"))?;
+        if !theirs.approx_eq(normalizer, 1e-4) {
+            return Err(format!(
+                "[model] init_from: {} was trained with another normaliser than this run's data \
+                 gives (rebuild the same data set, or train from scratch)",
+                norm_path.display()
+            ));
+        }
+        Ok(())
+    }
+
+    fn init_with_data(&self, device: &Device, _normalizer: &Normalizer) -> PartAutoencoder {
+        match &self.init_from {
+            None => self.init(device),
+            // Checked by `check_data` before this is called.
+            Some(from) => {
+                read_vq_weights(from, &self.table, device)
+                    .unwrap_or_else(|e| panic!("[model] init_from: {e}"))
+                    .0
+            }
+        }
+    }
+
     fn loss(&self, model: &PartAutoencoder, batch: &Batch) -> Losses {
-        let l = model.loss(batch.motion.clone());
+        let l = model.loss_with(batch.motion.clone(), self.frozen.as_ref());
         let [body, hands, face] = l.recon_parts;
+        let mut total = l.total;
         let mut parts = vec![
             ("body", body),
             ("hands", hands),
             ("face", face),
             ("velocity", l.velocity),
+            ("acceleration", l.acceleration),
             ("commit", l.commit),
         ];
         if let Some(p) = l.quant.perplexity {
             parts.push(("perplexity", p));
         }
-        Losses {
-            total: l.total,
-            parts,
+        if self.table.foot_velocity_weight > 0.0 {
+            let f = self
+                .feet
+                .get()
+                .velocity_loss(l.reconstruction, batch.motion.clone(), self.fps);
+            total = total + f.clone() * self.table.foot_velocity_weight;
+            parts.push(("foot_velocity", f));
         }
+        Losses { total, parts }
     }
 
     fn model_config(&self) -> toml::Table {
@@ -439,6 +566,77 @@ pub fn assemble_holistic_bundle(
     }
     // The autoencoder's normaliser is the one every network saw.
     super::bundle_files::copy_normalizer(vq_run, &out.join(bundle_files::NORMALIZER))?;
+    super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
+}
+
+/// The holistic model in `bundle` with its part autoencoder replaced by the finished
+/// `soulnet_vq` run `vq_run` (same architecture, same normaliser: a decoder fine-tuned with
+/// `[model] decoders_only`, say), written to `out` (which may be `bundle` itself): the MMR and
+/// the generator are copied byte for byte, the sampling defaults kept.
+pub fn replace_holistic_autoencoder(
+    vq_run: &Path,
+    bundle: &Path,
+    out: &Path,
+    name: &str,
+) -> Result<(), crate::TrainError> {
+    use dancegen_soulnet::bundle::{BundleConfig, files as bundle_files};
+
+    let err = |p: &Path, reason: String| crate::TrainError::Config {
+        path: p.to_path_buf(),
+        reason,
+    };
+    let mt = bundle.join(bundle_files::MODEL_TOML);
+    let text = std::fs::read_to_string(&mt).map_err(|e| crate::TrainError::io(&mt, e))?;
+    let mut config: BundleConfig =
+        toml::from_str(&text).map_err(|e| err(&mt, e.message().to_string()))?;
+    let dev = device::inference();
+    let (vq_table, vq) = load_run(vq_run, KIND, |t: &VqTable| t.autoencoder().init(&dev))
+        .map_err(|r| err(vq_run, r))?;
+    if !vq_table.same_architecture(&config.vq) {
+        return Err(err(
+            vq_run,
+            format!(
+                "its part autoencoder's architecture is not the one {} was trained on",
+                bundle.display()
+            ),
+        ));
+    }
+    let theirs = Normalizer::load(&bundle.join(bundle_files::NORMALIZER))?;
+    let ours = Normalizer::load(&vq_run.join(files::NORMALIZER))?;
+    if !ours.approx_eq(&theirs, 1e-4) {
+        return Err(err(
+            vq_run,
+            format!(
+                "trained with another normaliser than {}'s",
+                bundle.display()
+            ),
+        ));
+    }
+    // Read everything kept before writing anything: `out` may be `bundle`.
+    let mut kept = Vec::new();
+    for file in [
+        bundle_files::MMR,
+        bundle_files::GENERATOR,
+        bundle_files::NORMALIZER,
+        bundle_files::CARD,
+    ] {
+        let p = bundle.join(file);
+        match std::fs::read(&p) {
+            Ok(bytes) => kept.push((file, bytes)),
+            Err(e) if file == bundle_files::CARD && e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(crate::TrainError::io(&p, e)),
+        }
+    }
+    config.name = name.into();
+    config.vq = vq_table;
+    std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
+    let vp = out.join(bundle_files::VQ);
+    save(&vq, &vp, weights::Storage::F16).map_err(|e| err(&vp, e))?;
+    for (file, bytes) in kept {
+        let dst = out.join(file);
+        dancegen_io::write_atomic(&dst, |w| std::io::Write::write_all(w, &bytes))
+            .map_err(|e| crate::TrainError::io(&dst, e))?;
+    }
     super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
 }
 
