@@ -307,16 +307,22 @@ pub struct BundleArgs {
     /// Finished `tcdiffpp_group` run directory (group model).
     #[arg(long, value_name = "RUN", conflicts_with_all = ["vqvae", "hfsq"])]
     pub group: Option<PathBuf>,
-    /// Finished `soulnet_vq` run directory (holistic model).
-    #[arg(long, value_name = "RUN", requires_all = ["holistic_mmr", "holistic_generator"],
-          conflicts_with_all = ["vqvae", "hfsq", "group"])]
+    /// Finished `soulnet_vq` run directory (holistic model; with --holistic-mmr and
+    /// --holistic-generator, or with --holistic-model).
+    #[arg(long, value_name = "RUN", conflicts_with_all = ["vqvae", "hfsq", "group"])]
     pub holistic_vq: Option<PathBuf>,
     /// Finished `soulnet_mmr` run directory (holistic model).
-    #[arg(long, value_name = "RUN", requires = "holistic_vq")]
+    #[arg(long, value_name = "RUN", requires_all = ["holistic_vq", "holistic_generator"])]
     pub holistic_mmr: Option<PathBuf>,
     /// Finished `soulnet_magm` run directory (holistic model).
-    #[arg(long, value_name = "RUN", requires = "holistic_vq")]
+    #[arg(long, value_name = "RUN", requires_all = ["holistic_vq", "holistic_mmr"])]
     pub holistic_generator: Option<PathBuf>,
+    /// A holistic model directory whose MMR, generator, normaliser and sampling are kept, its
+    /// part autoencoder replaced by --holistic-vq's (a decoder fine-tuned with `[model]
+    /// decoders_only`, say).
+    #[arg(long, value_name = "MODEL_DIR", requires = "holistic_vq",
+          conflicts_with_all = ["holistic_mmr", "holistic_generator"])]
+    pub holistic_model: Option<PathBuf>,
     /// Model name written to model.toml (default: lodgepp-small, reactdance-small,
     /// tcdiffpp-small or soulnet-small).
     #[arg(long)]

@@ -6,7 +6,7 @@ use std::io::Write;
 use anyhow::{Result, bail};
 use dancegen_train::tasks::lodgepp::assemble_bundle;
 use dancegen_train::tasks::reactdance::assemble_duet_bundle;
-use dancegen_train::tasks::soulnet::assemble_holistic_bundle;
+use dancegen_train::tasks::soulnet::{assemble_holistic_bundle, replace_holistic_autoencoder};
 use dancegen_train::tasks::tcdiffpp::assemble_group_bundle;
 
 use crate::cli::BundleArgs;
@@ -20,6 +20,12 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
     ) {
         return assemble(args, quiet, "soulnet-small", "the holistic model", |name| {
             assemble_holistic_bundle(vq, mmr, generator, &args.output, name)?;
+            Ok(String::new())
+        });
+    }
+    if let (Some(vq), Some(model)) = (&args.holistic_vq, &args.holistic_model) {
+        return assemble(args, quiet, "soulnet-small", "the holistic model", |name| {
+            replace_holistic_autoencoder(vq, model, &args.output, name)?;
             Ok(String::new())
         });
     }
@@ -38,8 +44,8 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
     let (Some(vqvae), Some(gpt), Some(pddm)) = (&args.vqvae, &args.gpt, &args.pddm) else {
         bail!(
             "give --vqvae, --gpt and --pddm (solo model), --hfsq and --ldm (duet model), \
-             --group (group model) or --holistic-vq, --holistic-mmr and --holistic-generator \
-             (holistic model)"
+             --group (group model) or --holistic-vq with --holistic-mmr and \
+             --holistic-generator, or with --holistic-model (holistic model)"
         );
     };
     assemble(

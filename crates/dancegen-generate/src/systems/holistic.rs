@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dancegen_lodgepp::planted_feet::clean_planted_feet;
+use dancegen_lodgepp::planted_feet::{clean_planted_feet, lock_planted_feet};
 use dancegen_motion::face::{FaceWeights, flame::FlameMapping};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_motion::skeleton::Skeleton;
@@ -26,8 +26,9 @@ pub const MIN_SONG_SECONDS: f64 = 2.0;
 /// Holistic options beyond [`CommonOptions`]; the defaults are the shipped system.
 #[derive(Clone, Debug)]
 pub struct HolisticOptions {
-    /// Planted feet stay put: the solo system's root lock and leg IK on the body
-    /// (`dancegen_lodgepp::planted_feet`; post-processing, not part of SoulNet). Without it the
+    /// Planted feet stay put: the solo system's root lock, and leg IK where the model's
+    /// `[sampling] foot_ik` asks for it, on the body (`dancegen_lodgepp::planted_feet`;
+    /// post-processing, not part of SoulNet). Without it the
     /// held-out dances skate in 82 % of frames against the real 18 % (docs/holistic-eval.md).
     pub foot_lock: bool,
     /// A user's `(52, 103)` ARKit → FLAME mapping (`.npy`): the dance's face is then also given
@@ -123,12 +124,21 @@ impl DanceSystem for Holistic {
             // Through EDGE-151 frames (their contact channel: EDGE's velocity labels), as the
             // group system does; only the body's joints and root change.
             let mut frames = Edge151::encode(&body).map_err(|e| gen_err(&e))?;
-            clean_planted_feet(&mut frames);
+            if model.config.sampling.foot_ik {
+                clean_planted_feet(&mut frames);
+            } else {
+                lock_planted_feet(&mut frames);
+            }
             body = Edge151::decode(&frames).map_err(|e| gen_err(&e))?;
             for f in 0..t {
                 hol.poses[f * 156..f * 156 + 66].copy_from_slice(&body.poses[f * 72..f * 72 + 66]);
             }
-            notes.push("planted feet locked (post-processing, not part of SoulNet)".into());
+            notes.push(if model.config.sampling.foot_ik {
+                "planted feet locked: root lock and leg IK (post-processing, not part of SoulNet)"
+                    .into()
+            } else {
+                "planted feet locked: root lock (post-processing, not part of SoulNet)".into()
+            });
         }
         // The planted feet on the floor frame by frame, as for the solo (systems::solo::to_smpl).
         body.put_feet_on_tracked_floor().map_err(|e| gen_err(&e))?;
