@@ -16,9 +16,18 @@
 //!   weight error (synthetic face), and the mean jerk of the pelvis-relative body joints of the
 //!   real clips and of their reconstruction.
 //!
+//! - `roundtrip DATASET_DIR VQ OUT_DIR`: the held-out and the training clips' bodies as SMPL
+//!   `.npz` (AMASS-style, as `dancegen generate` writes it), read back from the holistic vector in two
+//!   ways: `OUT_DIR/{held_out,train}/real/` through the representation alone and
+//!   `OUT_DIR/{held_out,train}/recon/` through the part autoencoder `VQ` (a `soulnet_vq` run or
+//!   a holistic bundle), both then put on the tracked floor as generation does (without its foot
+//!   lock), so `dancegen eval --metrics physical` tells what the autoencoder alone does to the
+//!   feet, the jitter and the tempo.
+//!
 //! ```text
 //!     cargo run --release -p dancegen-train --example holistic_probe -- mmr models/soulnet-small target/datasets/holistic
 //!     cargo run --release -p dancegen-train --example holistic_probe -- recon target/datasets/holistic target/runs/soulnet_small_vq ...
+//!     cargo run --release -p dancegen-train --example holistic_probe -- roundtrip target/datasets/holistic models/soulnet-small target/holistic-roundtrip
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -30,6 +39,7 @@ use dancegen_motion::face::ARKIT_COUNT;
 use dancegen_motion::repr::holistic::split::{BODY_DIMS, BODY_HAND_DIMS};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::device;
+use dancegen_nn::part_autoencoder::PartAutoencoder;
 use dancegen_nn::retrieval::SequenceEncoder;
 use dancegen_nn::weights::{self, Layout};
 use dancegen_soulnet::bundle::HolisticModel;
@@ -44,7 +54,12 @@ const WINDOW: usize = 128;
 const SEGMENT: usize = 30;
 
 fn held_out(dataset: &Path) -> Result<Vec<Clip>, String> {
-    let h = std::path::absolute(dataset.join("held_out")).map_err(|e| e.to_string())?;
+    clips_in(&dataset.join("held_out"))
+}
+
+/// The holistic clips of a data set folder with `motion/`, `holistic/` and `music/`.
+fn clips_in(dir: &Path) -> Result<Vec<Clip>, String> {
+    let h = std::path::absolute(dir).map_err(|e| e.to_string())?;
     let text = format!(
         "[run]\ndir = \"/tmp/unused\"\nsteps = 1\n[data]\npaths = [\"{m}\"]\nholistic = \"{hol}\"\n\
          representation = \"holistic\"\nwindow = 64\nstride = 64\nbatch_size = 1\n[data.music]\ndir = \"{mu}\"\ndims = {MUSIC_DIMS}\n\
@@ -59,7 +74,7 @@ fn held_out(dataset: &Path) -> Result<Vec<Clip>, String> {
         clips.extend(load_clips(&f, &c.data).map_err(|e| e.to_string())?);
     }
     if clips.is_empty() {
-        return Err(format!("{}: no held-out clips", h.display()));
+        return Err(format!("{}: no clips", h.display()));
     }
     Ok(clips)
 }
@@ -340,6 +355,87 @@ fn body_jerk_sum(joints: &[f32], t: usize) -> f64 {
         .sum()
 }
 
+/// A part autoencoder and its normaliser: a `soulnet_vq` run or a holistic bundle.
+fn load_vq(path: &Path, dev: &Device) -> Result<(PartAutoencoder, Normalizer), String> {
+    use dancegen_soulnet::bundle::files as bundle_files;
+    if path.join(bundle_files::VQ).is_file() {
+        let m = HolisticModel::load(path, dev).map_err(|e| e.to_string())?;
+        let norm =
+            Normalizer::load(&path.join(bundle_files::NORMALIZER)).map_err(|e| e.to_string())?;
+        return Ok((m.vq, norm));
+    }
+    let table: VqTable = dancegen_train::tasks::bundle_files::finished_run_config(path, KIND)
+        .map_err(|e| e.to_string())?;
+    let vq = weights::load(
+        table.autoencoder().init(dev),
+        &path.join(files::WEIGHTS),
+        Layout::Burn,
+    )
+    .map_err(|e| e.to_string())?;
+    let norm = Normalizer::load(&path.join(files::NORMALIZER)).map_err(|e| e.to_string())?;
+    Ok((vq, norm))
+}
+
+/// Raw holistic rows `(T, 675)` → the SMPL 24 body on the tracked floor, written as `.npz`.
+fn write_body(rows: &[f32], path: &Path) -> Result<(), String> {
+    let fps = 30.0;
+    let d = dancegen_soulnet::layout::decode(rows, fps)?;
+    let t = d.motion.frames();
+    let mut poses = vec![0f32; t * 72];
+    for f in 0..t {
+        poses[f * 72..f * 72 + 66].copy_from_slice(&d.motion.poses[f * 156..f * 156 + 66]);
+    }
+    let mut body = dancegen_motion::repr::SmplMotion::new(fps, poses, d.motion.trans.clone())
+        .map_err(|e| e.to_string())?;
+    body.put_feet_on_tracked_floor()
+        .map_err(|e| e.to_string())?;
+    dancegen_motion::smpl_npz::write_smpl_npz(
+        path,
+        &body,
+        &dancegen_motion::smpl_npz::SmplNpzOptions::default(),
+    )
+    .map_err(|e| e.to_string())
+}
+
+fn roundtrip(dataset: &Path, vq_path: &Path, out: &Path) -> Result<serde_json::Value, String> {
+    let dev = device::inference();
+    let (vq, norm) = load_vq(vq_path, &dev)?;
+    let mut written = serde_json::Map::new();
+    for (split, dir) in [
+        ("held_out", dataset.join("held_out")),
+        ("train", dataset.to_path_buf()),
+    ] {
+        let (real_dir, recon_dir) = (out.join(split).join("real"), out.join(split).join("recon"));
+        for d in [&real_dir, &recon_dir] {
+            std::fs::create_dir_all(d).map_err(|e| format!("{}: {e}", d.display()))?;
+        }
+        let clips = clips_in(&dir)?;
+        for (i, c) in clips.iter().enumerate() {
+            let stem = c
+                .source
+                .file_stem()
+                .map_or_else(|| format!("clip{i}"), |s| s.to_string_lossy().into_owned());
+            let name = format!("{stem}_{i}.npz");
+            let t = c.frames / 4 * 4;
+            let raw = &c.motion[..t * TOTAL_DIMS];
+            write_body(raw, &real_dir.join(&name))?;
+            let mut x = raw.to_vec();
+            norm.transform(&mut x)?;
+            let input = Tensor::<3>::from_data(TensorData::new(x, [1, t, TOTAL_DIMS]), &dev);
+            let (rec, _) = vq.forward(input);
+            let mut y: Vec<f32> = rec
+                .into_data()
+                .convert::<f32>()
+                .try_to_vec::<f32>()
+                .map_err(|e| format!("{e:?}"))?;
+            norm.inverse(&mut y)?;
+            write_body(&y, &recon_dir.join(&name))?;
+        }
+        written.insert(split.into(), clips.len().into());
+    }
+    Ok(serde_json::json!({ "out": out.display().to_string(), "clips": written }))
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
@@ -353,8 +449,13 @@ fn main() {
             Path::new(&args[1]),
             &args[2..].iter().map(PathBuf::from).collect::<Vec<_>>(),
         ),
+        Some("roundtrip") if args.len() == 4 => roundtrip(
+            Path::new(&args[1]),
+            Path::new(&args[2]),
+            Path::new(&args[3]),
+        ),
         _ => Err(
-            "usage: holistic_probe mmr MODEL_DIR DATASET_DIR | mmr-gen MODEL_DIR DATASET_DIR GEN_DIR | recon DATASET_DIR VQ_RUN...".into(),
+            "usage: holistic_probe mmr MODEL_DIR DATASET_DIR | mmr-gen MODEL_DIR DATASET_DIR GEN_DIR | recon DATASET_DIR VQ_RUN... | roundtrip DATASET_DIR VQ OUT_DIR".into(),
         ),
     };
     match result {
