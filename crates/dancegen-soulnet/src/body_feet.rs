@@ -131,7 +131,7 @@ mod tests {
         let dev = device::inference();
         let feet = BodyFeet::new(&vec![0.0; d], &vec![1.0; d]).unwrap();
         let x = Tensor::<3>::from_data(TensorData::new(body_hands, [1, t, d]), &dev);
-        let v: Vec<f32> = feet.velocities(x).into_data().to_vec().unwrap();
+        let v: Vec<f32> = feet.velocities(x).into_data().try_to_vec::<f32>().unwrap();
         let mut largest = 0f32;
         for f in 1..t {
             for (k, &j) in FOOT_JOINTS.iter().enumerate() {

@@ -439,3 +439,41 @@ impl SamplingDefaults {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn older_bundles_keep_the_leg_ik_and_a_model_can_turn_it_off() {
+        let old: SamplingDefaults = toml::from_str("steps = 12\noverlap_tokens = 4").unwrap();
+        assert!(old.foot_ik, "absent: as the older bundles shipped");
+        assert_eq!(old.steps, 12);
+        let off: SamplingDefaults = toml::from_str("foot_ik = false").unwrap();
+        assert!(!off.foot_ik);
+        assert!(toml::from_str::<SamplingDefaults>("foot_ick = false").is_err());
+    }
+
+    #[test]
+    fn the_training_loss_weights_are_checked_and_not_the_architecture() {
+        let base: VqTable = toml::from_str("").unwrap();
+        let mut tuned = base.clone();
+        tuned.foot_velocity_weight = 1.0;
+        tuned.acceleration_weight = 0.5;
+        tuned.velocity_weight = 2.0;
+        assert!(tuned.validate().is_ok());
+        assert!(base.same_architecture(&tuned));
+        let mut wider = base.clone();
+        wider.width += 1;
+        assert!(!base.same_architecture(&wider));
+        tuned.foot_velocity_weight = -1.0;
+        assert!(
+            tuned
+                .validate()
+                .unwrap_err()
+                .contains("foot_velocity_weight")
+        );
+        // Zero weights are not written, so older readers still read the table.
+        assert!(!toml::to_string(&base).unwrap().contains("foot_velocity"));
+    }
+}

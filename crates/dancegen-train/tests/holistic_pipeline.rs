@@ -13,7 +13,7 @@ use dancegen_nn::device;
 use dancegen_nn::progress::NoHook;
 use dancegen_soulnet::bundle::HolisticModel;
 use dancegen_soulnet::pipeline::{GenerateOptions, generate};
-use dancegen_train::tasks::soulnet::assemble_holistic_bundle;
+use dancegen_train::tasks::soulnet::{assemble_holistic_bundle, replace_holistic_autoencoder};
 use dancegen_train::{RunOptions, TrainConfig};
 
 /// AIST++ sequence frames at 30 fps.
@@ -177,6 +177,57 @@ fn three_runs_make_a_model_that_dances_longer_than_one_window() {
     let d = dancegen_soulnet::layout::decode(&made.rows, 30.0).unwrap();
     assert_eq!(d.motion.poses.len(), 100 * 52 * 3);
     assert!(d.face.iter().all(|v| (0.0..=1.0).contains(v)));
+
+    // The autoencoder's decoder fine-tuned alone on the feet, swapped into the model: the
+    // MMR, the generator, the normaliser and the sampling stay; the tokens decode as before
+    // apart from the decoder.
+    let vq_model = "[model]\nkind = \"soulnet_vq\"\nnum_quantizers = 3\nnb_code = 16\ncode_dim = 8\nwidth = 16\ndepth = 1";
+    train(
+        dir,
+        "vq_feet",
+        32,
+        &format!(
+            "{vq_model}\ninit_from = \"vq\"\ndecoders_only = true\nfoot_velocity_weight = 1.0"
+        ),
+    );
+    let swapped = dir.join("model_feet");
+    replace_holistic_autoencoder(&dir.join("vq_feet"), &out, &swapped, "toy-feet").unwrap();
+    for f in [
+        "mmr.safetensors",
+        "generator.safetensors",
+        "normalizer.json",
+    ] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(swapped.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert_ne!(
+        std::fs::read(out.join("vq.safetensors")).unwrap(),
+        std::fs::read(swapped.join("vq.safetensors")).unwrap()
+    );
+    let tuned = HolisticModel::load(&swapped, &dev).unwrap();
+    assert_eq!(tuned.config.name, "toy-feet");
+    assert_eq!(tuned.config.sampling, model.config.sampling);
+    assert_eq!(tuned.config.vq.foot_velocity_weight, 1.0);
+    let made_tuned = generate(&tuned, &music, &opts, &dev, &NoHook).unwrap();
+    assert_eq!(made_tuned.frames, 100);
+    // Another architecture is refused, naming the run.
+    train(
+        dir,
+        "vq_wide",
+        32,
+        &vq_model.replace("width = 16", "width = 24"),
+    );
+    let e = replace_holistic_autoencoder(&dir.join("vq_wide"), &out, &dir.join("x"), "x")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vq_wide") && e.contains("architecture"), "{e}");
+    assert!(
+        !dir.join("x").exists(),
+        "nothing written for a refused swap"
+    );
 
     // A model directory missing a file names it.
     std::fs::remove_file(out.join("mmr.safetensors")).unwrap();
