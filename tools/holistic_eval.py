@@ -128,6 +128,7 @@ def model_info(model_dir):
         "cond_scale": float(s.get("cond_scale", 4.0)),
         "steps": int(s.get("steps", 18)),
         "quantizer": cfg.get("vq", {}).get("quantizer", "?"),
+        "foot_ik": bool(s.get("foot_ik", True)),  # SamplingDefaults::default
     }
 
 
@@ -312,7 +313,7 @@ def cmd_report(args):
         mi = model_info(meta["model_abs"])
     else:  # dry run without a model: configs/soulnet_small_*.toml's values
         mi = {"name": "(dry run: no model)", "window_tokens": 32, "overlap_tokens": 8, "fpt": 4,
-              "cond_scale": 4.0, "steps": 18, "quantizer": "?"}
+              "cond_scale": 4.0, "steps": 18, "quantizer": "?", "foot_ik": True}
     wt, ov, fpt = mi["window_tokens"], mi["overlap_tokens"], mi["fpt"]
     n_train = len([f for f in os.listdir(os.path.join(out, "gt_train")) if f.endswith(".npy")])
     n_all = n_train + len(clips)
@@ -646,9 +647,10 @@ def cmd_report(args):
         w(f"Foot skating: the generated segments skate in {fg * 100:.1f} % of frames against "
           f"the real motion's {real['fsr'] * 100:.1f} % ({fg / real['fsr']:.1f}×), PFC "
           f"{pg:.2f} against {real['pfc']:.2f} ({pg / real['pfc']:.1f}×), with the foot lock "
-          "`generate` applies by default (the solo system's root lock and leg IK on the body; "
-          "post-processing, not part of SoulNet; before it was added the same model skated in "
-          "82 % of frames).")
+          "`generate` applies by default (the solo system's root lock"
+          + (" and leg IK" if mi["foot_ik"] else ", without leg IK (`[sampling] foot_ik = false`)")
+          + " on the body; post-processing, not part of SoulNet; before it was added the first "
+          "model skated in 82 % of frames).")
     w("")
 
     # ---- physical plausibility (+ the contact sheet)

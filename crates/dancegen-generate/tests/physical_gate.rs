@@ -240,10 +240,6 @@ fn duet_reactdance_small_is_plausible() {
 }
 
 #[test]
-#[ignore = "issue 41, not met yet: the retrained soulnet-small dances the demo song with 0.60 \
-            steps/s and 0.27 m/s pelvis speed (real salsa and AIST++ at least 0.85 and 0.28 with \
-            the -25 % margin); its floor, jerk, spikes and sliding pass \
-            (models/soulnet-small/MODEL_CARD.md)"]
 fn holistic_soulnet_small_is_plausible() {
     // The holistic model has no genre control: the whole real set it was trained on.
     let real = real(&["cmu-salsa", "aistpp/motions"], None);
