@@ -139,3 +139,47 @@ fn holistic_errors_name_the_problem() {
     assert!(stderr(&o).contains("model.toml"), "{}", stderr(&o));
     assert!(!std::path::Path::new(out).exists());
 }
+
+#[test]
+fn swapping_a_holistic_autoencoder_names_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("model");
+    let out = out.to_str().unwrap();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/soulnet-small");
+    // --holistic-model needs the run to swap in, and does not mix with the three-run form.
+    let o = dancegen(&["-q", "bundle", "--holistic-model", model, "-o", out]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--holistic-vq"), "{}", stderr(&o));
+    let o = dancegen(&[
+        "-q",
+        "bundle",
+        "--holistic-vq",
+        model,
+        "--holistic-mmr",
+        model,
+        "--holistic-generator",
+        model,
+        "--holistic-model",
+        model,
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--holistic-model"), "{}", stderr(&o));
+    // A folder that is not a finished soulnet_vq run is named.
+    let not_run = dir.path().join("not-a-run");
+    std::fs::create_dir_all(&not_run).unwrap();
+    let o = dancegen(&[
+        "-q",
+        "bundle",
+        "--holistic-vq",
+        not_run.to_str().unwrap(),
+        "--holistic-model",
+        model,
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not-a-run"), "{}", stderr(&o));
+    assert!(!std::path::Path::new(out).exists(), "nothing written");
+}
