@@ -218,11 +218,6 @@ fn solo_lodgepp_small_is_plausible() {
 }
 
 #[test]
-#[ignore = "issue 41, not met yet: reactdance-small's follower of the held-out leader 61_13 \
-            slides its planted feet at 0.567 m/s (gate 0.485, 1.5x the real salsa's largest); \
-            every other figure passes. Its autoencoder alone now slides 0.22 m/s on real \
-            followers (real 0.19); the rest comes from the latent model's predictions \
-            (models/reactdance-small/MODEL_CARD.md, issue 41 part 6)"]
 fn duet_reactdance_small_is_plausible() {
     let real = real(&["cmu-salsa"], None);
     // A held-out leader (take 13 is in no duet training set), at its true rate.
