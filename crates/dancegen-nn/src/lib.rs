@@ -18,6 +18,7 @@ pub use burn;
 pub mod attention;
 pub mod autoencoder;
 pub mod conv;
+pub mod denormalize;
 pub mod device;
 pub mod diffusion;
 pub mod edge151;

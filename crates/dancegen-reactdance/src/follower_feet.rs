@@ -20,7 +20,8 @@ use dancegen_motion::skeleton::Skeleton;
 use dancegen_nn::burn;
 use dancegen_nn::loss::{FkSkeleton, forward_kinematics, rot6d_to_matrix};
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::Tensor;
+use dancegen_nn::denormalize::Denormalizer;
 
 /// SMPL joints of the feet, in the order of the duet contact channels.
 pub const FOOT_JOINTS: [usize; 4] = [7, 8, 10, 11];
@@ -30,22 +31,14 @@ pub const FOOT_JOINTS: [usize; 4] = [7, 8, 10, 11];
 #[derive(Clone, Debug)]
 pub struct FollowerFeet {
     skeleton: FkSkeleton,
-    mean: Vec<f32>,
-    std: Vec<f32>,
+    features: Denormalizer,
 }
 
 impl FollowerFeet {
     /// `mean` and `std` of the follower's [`DuetFollower::DIMS`] channels (the first channels of
     /// the duet training normaliser).
     pub fn new(mean: &[f64], std: &[f64]) -> Result<Self, String> {
-        let d = DuetFollower::DIMS;
-        if mean.len() < d || std.len() < d {
-            return Err(format!(
-                "the normaliser has {} means and {} stds, the follower needs {d}",
-                mean.len(),
-                std.len()
-            ));
-        }
+        let features = Denormalizer::first(mean, std, DuetFollower::DIMS)?;
         let smpl = Skeleton::smpl24();
         let chain: Vec<usize> = std::iter::once(0).chain(LOWER_JOINTS).collect();
         let mut parents = Vec::with_capacity(chain.len());
@@ -62,22 +55,15 @@ impl FollowerFeet {
         }
         Ok(Self {
             skeleton: FkSkeleton { parents, offsets },
-            mean: mean[..d].iter().map(|&v| v as f32).collect(),
-            std: std[..d].iter().map(|&v| v as f32).collect(),
+            features,
         })
     }
 
     /// Normalised follower features `[B, T, 151]` → foot joints `[B, T, 4, 3]` in the leader
     /// frame, metres.
     pub fn positions(&self, x: Tensor<3>) -> Tensor<4> {
-        let [b, t, d] = x.dims();
-        let device: Device = x.device();
-        let row = |v: &[f32]| {
-            Tensor::<1>::from_data(TensorData::new(v.to_vec(), [d]), &device)
-                .reshape([1, 1, d])
-                .expand([b, t, d])
-        };
-        let raw = x * row(&self.std) + row(&self.mean);
+        let [b, t, _] = x.dims();
+        let raw = self.features.apply(x);
         let n = b * t;
         let legs = LOWER_JOINTS.len();
         let lr = DuetFollower::LOWER_ROT;

@@ -19,7 +19,8 @@
 use dancegen_motion::repr::holistic::split::BODY_DIMS;
 use dancegen_nn::burn;
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::Tensor;
+use dancegen_nn::denormalize::Denormalizer;
 
 /// SMPL joints of the feet (left ankle, right ankle, left foot, right foot).
 pub const FOOT_JOINTS: [usize; 4] = [7, 8, 10, 11];
@@ -27,24 +28,15 @@ pub const FOOT_JOINTS: [usize; 4] = [7, 8, 10, 11];
 /// The body rows' normaliser, to read the feet in metres.
 #[derive(Clone, Debug)]
 pub struct BodyFeet {
-    mean: Vec<f32>,
-    std: Vec<f32>,
+    body: Denormalizer,
 }
 
 impl BodyFeet {
     /// `mean` and `std` of the holistic normaliser (its first [`BODY_DIMS`] values are the
     /// body's).
     pub fn new(mean: &[f64], std: &[f64]) -> Result<Self, String> {
-        if mean.len() < BODY_DIMS || std.len() < BODY_DIMS {
-            return Err(format!(
-                "the normaliser has {} means and {} stds, the body needs {BODY_DIMS}",
-                mean.len(),
-                std.len()
-            ));
-        }
         Ok(Self {
-            mean: mean[..BODY_DIMS].iter().map(|&v| v as f32).collect(),
-            std: std[..BODY_DIMS].iter().map(|&v| v as f32).collect(),
+            body: Denormalizer::first(mean, std, BODY_DIMS)?,
         })
     }
 
@@ -52,13 +44,7 @@ impl BodyFeet {
     /// frame, each in its later frame's heading frame.
     pub fn velocities(&self, x: Tensor<3>) -> Tensor<4> {
         let [b, t, _] = x.dims();
-        let device: Device = x.device();
-        let row = |v: &[f32]| {
-            Tensor::<1>::from_data(TensorData::new(v.to_vec(), [BODY_DIMS]), &device)
-                .reshape([1, 1, BODY_DIMS])
-                .expand([b, t, BODY_DIMS])
-        };
-        let raw = x.narrow(2, 0, BODY_DIMS) * row(&self.std) + row(&self.mean);
+        let raw = self.body.apply(x);
         let n = FOOT_JOINTS.len();
         let ric = Tensor::cat(
             FOOT_JOINTS
@@ -98,6 +84,7 @@ mod tests {
     use super::*;
     use dancegen_motion::repr::holistic::split::to_split;
     use dancegen_motion::repr::{Holistic623, HumanMl263};
+    use dancegen_nn::burn::tensor::TensorData;
     use dancegen_nn::device;
 
     /// A turning, travelling body with moving legs, in the split layout (real HumanML3D rows).

@@ -1,11 +1,12 @@
-//! The steps every `dancegen bundle` assembler shares: read a finished run's `[config]`, copy
-//! its normaliser, write the bundle's `model.toml` (all atomically, each error naming its file).
+//! The steps every `dancegen bundle` assembler shares: read a finished run's `[config]`, check
+//! and copy its normaliser, write the bundle's `model.toml` (all atomically, each error naming its file).
 
 use std::path::Path;
 
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
+use crate::data::Normalizer;
 use crate::{TrainError, files};
 
 fn config_error(p: &Path, reason: String) -> TrainError {
@@ -28,6 +29,13 @@ pub fn finished_run_config<T: DeserializeOwned>(run: &Path, kind: &str) -> Resul
         .ok_or_else(|| config_error(&mp, "no [config]".into()))?
         .try_into()
         .map_err(|e: toml::de::Error| config_error(&mp, e.message().to_string()))
+}
+
+/// Whether the normaliser file `theirs` maps values as `ours` does, so that weights trained with
+/// it read data normalised by `ours` in the same units. Within 1e-4: the same data set gives the
+/// same statistics up to the decimal printing of `normalizer.json`.
+pub fn normalizer_matches(ours: &Normalizer, theirs: &Path) -> Result<bool, TrainError> {
+    Ok(Normalizer::load(theirs)?.approx_eq(ours, 1e-4))
 }
 
 /// Copies the run's `normalizer.json` to `dst`.

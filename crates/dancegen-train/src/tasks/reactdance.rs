@@ -198,8 +198,9 @@ fn load_initial_hfsq(
     device: &Device,
 ) -> Result<HfsqAutoencoder, String> {
     let (ae, norm_path) = read_hfsq_weights(from, cfg, device)?;
-    let theirs = Normalizer::load(&norm_path).map_err(|e| e.to_string())?;
-    if !theirs.approx_eq(normalizer, 1e-4) {
+    if !super::bundle_files::normalizer_matches(normalizer, &norm_path)
+        .map_err(|e| e.to_string())?
+    {
         return Err(format!(
             "{}: trained with another normaliser than this run's data gives (rebuild the same \
              data set, or train from scratch)",
@@ -467,9 +468,8 @@ fn replace_bundle_autoencoder(
             ),
         ));
     }
-    let theirs = Normalizer::load(&bundle.join(bundle_files::NORMALIZER))?;
     let ours = Normalizer::load(&hfsq_run.join(files::NORMALIZER))?;
-    if !ours.approx_eq(&theirs, 1e-4) {
+    if !super::bundle_files::normalizer_matches(&ours, &bundle.join(bundle_files::NORMALIZER))? {
         return Err(err(
             hfsq_run,
             format!(

@@ -205,8 +205,9 @@ impl TrainTask for SoulnetVqTask {
         };
         let (_, norm_path) = read_vq_weights(from, &self.table, &device::inference())
             .map_err(|e| format!("[model] init_from: {e}"))?;
-        let theirs = Normalizer::load(&norm_path).map_err(|e| format!("[model] init_from: {e}"))?;
-        if !theirs.approx_eq(normalizer, 1e-4) {
+        let same = super::bundle_files::normalizer_matches(normalizer, &norm_path)
+            .map_err(|e| format!("[model] init_from: {e}"))?;
+        if !same {
             return Err(format!(
                 "[model] init_from: {} was trained with another normaliser than this run's data \
                  gives (rebuild the same data set, or train from scratch)",
@@ -601,9 +602,8 @@ pub fn replace_holistic_autoencoder(
             ),
         ));
     }
-    let theirs = Normalizer::load(&bundle.join(bundle_files::NORMALIZER))?;
     let ours = Normalizer::load(&vq_run.join(files::NORMALIZER))?;
-    if !ours.approx_eq(&theirs, 1e-4) {
+    if !super::bundle_files::normalizer_matches(&ours, &bundle.join(bundle_files::NORMALIZER))? {
         return Err(err(
             vq_run,
             format!(
