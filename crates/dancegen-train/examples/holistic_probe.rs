@@ -397,6 +397,14 @@ fn write_body(rows: &[f32], path: &Path) -> Result<(), String> {
     .map_err(|e| e.to_string())
 }
 
+/// The denormalised rows beside a written body (`x.npz` -> `x.rows.npy`, `(T, TOTAL_DIMS)`), so
+/// the decoded joint positions can be compared with the bodies posed by the 6D rotations.
+fn write_rows(rows: &[f32], body: &Path) -> Result<(), String> {
+    let path = body.with_extension("rows.npy");
+    dancegen_io::write_npy_f32(&path, &[rows.len() / TOTAL_DIMS, TOTAL_DIMS], rows)
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
 fn roundtrip(dataset: &Path, vq_path: &Path, out: &Path) -> Result<serde_json::Value, String> {
     let dev = device::inference();
     let (vq, norm) = load_vq(vq_path, &dev)?;
@@ -419,6 +427,7 @@ fn roundtrip(dataset: &Path, vq_path: &Path, out: &Path) -> Result<serde_json::V
             let t = c.frames / 4 * 4;
             let raw = &c.motion[..t * TOTAL_DIMS];
             write_body(raw, &real_dir.join(&name))?;
+            write_rows(raw, &real_dir.join(&name))?;
             let mut x = raw.to_vec();
             norm.transform(&mut x)?;
             let input = Tensor::<3>::from_data(TensorData::new(x, [1, t, TOTAL_DIMS]), &dev);
@@ -430,6 +439,7 @@ fn roundtrip(dataset: &Path, vq_path: &Path, out: &Path) -> Result<serde_json::V
                 .map_err(|e| format!("{e:?}"))?;
             norm.inverse(&mut y)?;
             write_body(&y, &recon_dir.join(&name))?;
+            write_rows(&y, &recon_dir.join(&name))?;
         }
         written.insert(split.into(), clips.len().into());
     }
