@@ -15,9 +15,37 @@ use crate::rotation::{Mat3, Quat};
 /// taken as they are (centre them first for a fit with translation). Identity for empty or
 /// all-zero input.
 pub fn best_fit_rotation(a: &[[f64; 3]], b: &[[f64; 3]], weights: Option<&[f64]>) -> Mat3 {
+    fit_rotation(a, b, weights, None).rotation
+}
+
+/// A rotation fitted by [`fit_rotation`].
+#[derive(Clone, Copy, Debug)]
+pub struct RotationFit {
+    pub rotation: Mat3,
+    /// How well the data pins the rotation down: the gap between the two largest eigenvalues
+    /// of Horn's matrix `N` over `S = Σ w_i |a_i| |b_i|`, which bounds them. 0 when a whole
+    /// family of rotations fits equally well; for points that a rotation carries exactly it is
+    /// `2 (σ₂ + σ₃) / (σ₁ + σ₂ + σ₃)` of the cross-covariance's singular values.
+    pub margin: f64,
+}
+
+/// [`best_fit_rotation`] with an optional pull toward `near = (rotation, k)`: maximises Horn's
+/// `qᵀ N q + k · S · (q · q_near)²`. Where the fit is well determined (margin ≫ `k`) the result
+/// moves by a fraction of order `k / margin` of its distance to `rotation`; where rotations fit
+/// almost equally (margin below `k`) the one nearest `rotation` wins instead of whichever is
+/// marginally better. The margin reported is that of the fit without the pull.
+pub fn fit_rotation(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    weights: Option<&[f64]>,
+    near: Option<(&Mat3, f64)>,
+) -> RotationFit {
     let mut s = [[0.0f64; 3]; 3];
+    let mut bound = 0.0f64;
     for (i, (p, q)) in a.iter().zip(b).enumerate() {
         let w = weights.map_or(1.0, |w| w[i]);
+        let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        bound += w * norm(p) * norm(q);
         for (r, row) in s.iter_mut().enumerate() {
             for (c, cell) in row.iter_mut().enumerate() {
                 *cell += w * p[r] * q[c];
@@ -25,21 +53,39 @@ pub fn best_fit_rotation(a: &[[f64; 3]], b: &[[f64; 3]], weights: Option<&[f64]>
         }
     }
     let [[sxx, sxy, sxz], [syx, syy, syz], [szx, szy, szz]] = s;
-    let n = [
+    let mut n = [
         [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
         [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
         [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
         [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz],
     ];
     if n.iter().flatten().all(|v| v.abs() < 1e-300) {
-        return Mat3::IDENTITY;
+        return RotationFit {
+            rotation: Mat3::IDENTITY,
+            margin: 0.0,
+        };
     }
-    let q = top_eigenvector(n);
-    Mat3::from_quat(Quat::new(q[0], q[1], q[2], q[3]).normalize())
+    let (mut q, values) = top_eigenvector(n);
+    let margin = (values[0] - values[1]) / bound;
+    if let Some((r, k)) = near {
+        let p = r.to_quat();
+        let p = [p.w, p.x, p.y, p.z];
+        for (i, row) in n.iter_mut().enumerate() {
+            for (j, cell) in row.iter_mut().enumerate() {
+                *cell += k * bound * p[i] * p[j];
+            }
+        }
+        q = top_eigenvector(n).0;
+    }
+    RotationFit {
+        rotation: Mat3::from_quat(Quat::new(q[0], q[1], q[2], q[3]).normalize()),
+        margin,
+    }
 }
 
-/// Eigenvector of the largest eigenvalue of a symmetric 4 × 4 matrix (cyclic Jacobi).
-fn top_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
+/// Eigenvector of the largest eigenvalue of a symmetric 4 × 4 matrix (cyclic Jacobi), and the
+/// two largest eigenvalues.
+fn top_eigenvector(mut a: [[f64; 4]; 4]) -> ([f64; 4], [f64; 2]) {
     let mut v = [[0.0f64; 4]; 4];
     for (i, row) in v.iter_mut().enumerate() {
         row[i] = 1.0;
@@ -82,10 +128,13 @@ fn top_eigenvector(mut a: [[f64; 4]; 4]) -> [f64; 4] {
             }
         }
     }
-    let best = (0..4)
-        .max_by(|&i, &j| a[i][i].total_cmp(&a[j][j]))
-        .unwrap_or(0);
-    std::array::from_fn(|r| v[r][best])
+    let mut order = [0usize, 1, 2, 3];
+    order.sort_by(|&i, &j| a[j][j].total_cmp(&a[i][i]));
+    let best = order[0];
+    (
+        std::array::from_fn(|r| v[r][best]),
+        [a[order[0]][order[0]], a[order[1]][order[1]]],
+    )
 }
 
 #[cfg(test)]
@@ -153,5 +202,51 @@ mod tests {
         let fit = best_fit_rotation(&line, &line, None);
         assert!((fit.determinant() - 1.0).abs() < 1e-9);
         assert!((fit.mul_vec([0.0, 1.0, 0.0])[1] - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_tie_goes_to_the_rotation_near_the_given_one_and_a_clear_fit_barely_moves() {
+        let mut rng = SplitMix64(11);
+        // Targets mirrored through the xy plane: no rotation carries them, and every turn about
+        // x fits them equally (Horn's top eigenvalue is double). The one nearest `near` wins.
+        let a = [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let b = [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
+        for angle in [0.4, 2.5, -1.9] {
+            let want = Mat3::from_axis_angle([angle, 0.0, 0.0]);
+            // The previous frame 5° off the family.
+            let prev = want.mul(&Mat3::from_axis_angle([0.0, 0.087, 0.0]));
+            let got = fit_rotation(&a, &b, None, Some((&prev, 0.02))).rotation;
+            assert!(
+                angle_between(&got, &want) < 0.01,
+                "{angle}: {}",
+                angle_between(&got, &want)
+            );
+        }
+        let r = Mat3::from_axis_angle([0.3, -0.5, 0.2]);
+        // A clear fit: the pull moves it by a small fraction of its distance to `near`.
+        let a = points(&mut rng, 12);
+        let b: Vec<[f64; 3]> = a.iter().map(|p| r.mul_vec(*p)).collect();
+        let prev = r.mul(&Mat3::from_axis_angle([0.0, 0.1, 0.0]));
+        let got = fit_rotation(&a, &b, None, Some((&prev, 0.02))).rotation;
+        let moved = angle_between(&got, &r);
+        // The margin: 0 for the mirrored set (any turn about x fits), 2(σ₂+σ₃)/(σ₁+σ₂+σ₃) for
+        // points a rotation carries exactly.
+        let mirrored = [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
+        let m = fit_rotation(
+            &[[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            &mirrored,
+            None,
+            None,
+        );
+        assert!(m.margin.abs() < 1e-9, "{}", m.margin);
+        let e = [[3.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]];
+        let carried: Vec<[f64; 3]> = e.iter().map(|p| r.mul_vec(*p)).collect();
+        let m = fit_rotation(&e, &carried, None, None);
+        assert!((m.margin - 2.0 * 5.0 / 14.0).abs() < 1e-9, "{}", m.margin);
+        assert!(
+            moved > 0.0 && moved < 0.1 * 0.05,
+            "moved {moved} rad of 0.1"
+        );
+        assert!(angle_between(&best_fit_rotation(&a, &b, None), &r) < 1e-9);
     }
 }
