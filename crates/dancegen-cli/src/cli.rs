@@ -314,14 +314,15 @@ pub struct BundleArgs {
     /// Finished `soulnet_mmr` run directory (holistic model).
     #[arg(long, value_name = "RUN", requires_all = ["holistic_vq", "holistic_generator"])]
     pub holistic_mmr: Option<PathBuf>,
-    /// Finished `soulnet_magm` run directory (holistic model).
-    #[arg(long, value_name = "RUN", requires_all = ["holistic_vq", "holistic_mmr"])]
+    /// Finished `soulnet_magm` run directory (holistic model; with --holistic-vq and
+    /// --holistic-mmr, or with --holistic-model).
+    #[arg(long, value_name = "RUN", conflicts_with_all = ["vqvae", "hfsq", "group"])]
     pub holistic_generator: Option<PathBuf>,
-    /// A holistic model directory whose MMR, generator, normaliser and sampling are kept, its
+    /// A holistic model directory whose other networks, normaliser and sampling are kept: its
     /// part autoencoder replaced by --holistic-vq's (a decoder fine-tuned with `[model]
-    /// decoders_only`, say).
-    #[arg(long, value_name = "MODEL_DIR", requires = "holistic_vq",
-          conflicts_with_all = ["holistic_mmr", "holistic_generator"])]
+    /// decoders_only`, say) and/or its generator by --holistic-generator's (one trained with
+    /// `[model] vq` and `mmr` naming this model).
+    #[arg(long, value_name = "MODEL_DIR", conflicts_with = "holistic_mmr")]
     pub holistic_model: Option<PathBuf>,
     /// Model name written to model.toml (default: lodgepp-small, reactdance-small,
     /// tcdiffpp-small or soulnet-small).

@@ -6,7 +6,9 @@ use std::io::Write;
 use anyhow::{Result, bail};
 use dancegen_train::tasks::lodgepp::assemble_bundle;
 use dancegen_train::tasks::reactdance::assemble_duet_bundle;
-use dancegen_train::tasks::soulnet::{assemble_holistic_bundle, replace_holistic_autoencoder};
+use dancegen_train::tasks::soulnet::{
+    Replacements, assemble_holistic_bundle, replace_in_holistic_model,
+};
 use dancegen_train::tasks::tcdiffpp::assemble_group_bundle;
 
 use crate::cli::BundleArgs;
@@ -23,11 +25,28 @@ pub fn run(args: &BundleArgs, quiet: bool) -> Result<()> {
             Ok(String::new())
         });
     }
-    if let (Some(vq), Some(model)) = (&args.holistic_vq, &args.holistic_model) {
+    if let Some(model) = &args.holistic_model {
+        if args.holistic_vq.is_none() && args.holistic_generator.is_none() {
+            bail!(
+                "--holistic-model {}: give --holistic-vq and/or --holistic-generator (the runs \
+                 that replace its networks)",
+                model.display()
+            );
+        }
+        let runs = Replacements {
+            vq: args.holistic_vq.as_deref(),
+            generator: args.holistic_generator.as_deref(),
+        };
         return assemble(args, quiet, "soulnet-small", "the holistic model", |name| {
-            replace_holistic_autoencoder(vq, model, &args.output, name)?;
+            replace_in_holistic_model(runs, model, &args.output, name)?;
             Ok(String::new())
         });
+    }
+    if args.holistic_vq.is_some() || args.holistic_generator.is_some() {
+        bail!(
+            "the holistic model needs --holistic-vq, --holistic-mmr and --holistic-generator \
+             (three runs), or --holistic-model with --holistic-vq and/or --holistic-generator"
+        );
     }
     if let Some(run) = &args.group {
         return assemble(args, quiet, "tcdiffpp-small", "the group model", |name| {

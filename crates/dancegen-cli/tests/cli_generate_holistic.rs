@@ -141,7 +141,7 @@ fn holistic_errors_name_the_problem() {
 }
 
 #[test]
-fn swapping_a_holistic_autoencoder_names_what_is_wrong() {
+fn swapping_holistic_networks_names_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("model");
     let out = out.to_str().unwrap();
@@ -181,5 +181,28 @@ fn swapping_a_holistic_autoencoder_names_what_is_wrong() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("not-a-run"), "{}", stderr(&o));
+    // The same for a generator run; and a generator run alone says what goes with it.
+    let o = dancegen(&[
+        "-q",
+        "bundle",
+        "--holistic-generator",
+        not_run.to_str().unwrap(),
+        "--holistic-model",
+        model,
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not-a-run"), "{}", stderr(&o));
+    let o = dancegen(&[
+        "-q",
+        "bundle",
+        "--holistic-generator",
+        not_run.to_str().unwrap(),
+        "-o",
+        out,
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--holistic-model"), "{}", stderr(&o));
     assert!(!std::path::Path::new(out).exists(), "nothing written");
 }

@@ -11,9 +11,14 @@ use std::path::Path;
 use dancegen_io::NpyData;
 use dancegen_nn::device;
 use dancegen_nn::progress::NoHook;
+use dancegen_nn::weights::{self, Layout};
 use dancegen_soulnet::bundle::HolisticModel;
 use dancegen_soulnet::pipeline::{GenerateOptions, generate};
-use dancegen_train::tasks::soulnet::{assemble_holistic_bundle, replace_holistic_autoencoder};
+use dancegen_train::data::Normalizer;
+use dancegen_train::task::TrainTask;
+use dancegen_train::tasks::soulnet::{
+    Replacements, SoulnetMagmTask, assemble_holistic_bundle, replace_in_holistic_model,
+};
 use dancegen_train::{RunOptions, TrainConfig};
 
 /// AIST++ sequence frames at 30 fps.
@@ -191,7 +196,12 @@ fn three_runs_make_a_model_that_dances_longer_than_one_window() {
         ),
     );
     let swapped = dir.join("model_feet");
-    replace_holistic_autoencoder(&dir.join("vq_feet"), &out, &swapped, "toy-feet").unwrap();
+    let vq_feet = dir.join("vq_feet");
+    let runs = Replacements {
+        vq: Some(&vq_feet),
+        generator: None,
+    };
+    replace_in_holistic_model(runs, &out, &swapped, "toy-feet").unwrap();
     for f in [
         "mmr.safetensors",
         "generator.safetensors",
@@ -220,12 +230,114 @@ fn three_runs_make_a_model_that_dances_longer_than_one_window() {
         32,
         &vq_model.replace("width = 16", "width = 24"),
     );
-    let e = replace_holistic_autoencoder(&dir.join("vq_wide"), &out, &dir.join("x"), "x")
+    let vq_wide = dir.join("vq_wide");
+    let runs = Replacements {
+        vq: Some(&vq_wide),
+        generator: None,
+    };
+    let e = replace_in_holistic_model(runs, &out, &dir.join("x"), "x")
         .unwrap_err()
         .to_string();
     assert!(e.contains("vq_wide") && e.contains("architecture"), "{e}");
     assert!(
         !dir.join("x").exists(),
+        "nothing written for a refused swap"
+    );
+
+    // The generator trained further from the model itself (`vq`, `mmr` and `init_from` name
+    // the model directory): it starts from the model's weights, and swapped in it keeps the
+    // autoencoder, the MMR, the normaliser and the sampling.
+    let more = gen_model.replace(
+        "vq = \"vq\"\nmmr = \"mmr\"\n",
+        "vq = \"model\"\nmmr = \"model\"\ninit_from = \"model\"\n",
+    );
+    assert_ne!(more, gen_model);
+    let (c, path) = config(dir, "gen_more", 32, &more);
+    let task = SoulnetMagmTask::from_config(&c, &path).unwrap();
+    let start = task.init_with_data(
+        &dev,
+        &Normalizer::load(&out.join("normalizer.json")).unwrap(),
+    );
+    // The tensors as saved (the safetensors data block; the header's metadata order varies).
+    let tensors = |g: &dancegen_soulnet::generator::PartGenerator, name: &str| {
+        let p = dir.join(name);
+        weights::save_as(g, &p, Layout::Burn, &[], weights::Storage::F16).unwrap();
+        let b = std::fs::read(p).unwrap();
+        let n = u64::from_le_bytes(b[..8].try_into().unwrap()) as usize;
+        b[8 + n..].to_vec()
+    };
+    let first = tensors(&start, "start.safetensors");
+    assert!(
+        first == tensors(&model.generator, "shipped.safetensors"),
+        "init_from starts from the model's generator"
+    );
+    assert!(first != tensors(&task.init(&dev), "scratch.safetensors"));
+    train(dir, "gen_more", 32, &more);
+    let regen = dir.join("model_gen");
+    let gen_more = dir.join("gen_more");
+    let runs = Replacements {
+        vq: None,
+        generator: Some(&gen_more),
+    };
+    replace_in_holistic_model(runs, &out, &regen, "toy-gen").unwrap();
+    for f in ["vq.safetensors", "mmr.safetensors", "normalizer.json"] {
+        assert_eq!(
+            std::fs::read(out.join(f)).unwrap(),
+            std::fs::read(regen.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert_ne!(
+        std::fs::read(out.join("generator.safetensors")).unwrap(),
+        std::fs::read(regen.join("generator.safetensors")).unwrap()
+    );
+    let again = HolisticModel::load(&regen, &dev).unwrap();
+    assert_eq!(again.config.sampling, model.config.sampling);
+    assert_eq!(
+        generate(&again, &music, &opts, &dev, &NoHook)
+            .unwrap()
+            .frames,
+        100
+    );
+    // A generator of another size is refused where the run starts, naming init_from.
+    let (c, path) = config(
+        dir,
+        "gen_wide",
+        32,
+        &more.replace("d_model = 16", "d_model = 24"),
+    );
+    let e = SoulnetMagmTask::from_config(&c, &path).err().unwrap();
+    assert!(e.contains("init_from") && e.contains("[generator]"), "{e}");
+    // The runs' own generator goes into the fine-tuned model (same tokens); one trained on
+    // another autoencoder is refused, naming its run.
+    let runs = Replacements {
+        vq: None,
+        generator: Some(&dir.join("gen")),
+    };
+    replace_in_holistic_model(runs, &swapped, &dir.join("model_other"), "x").unwrap();
+    train(
+        dir,
+        "gen_wide_vq",
+        32,
+        &gen_model.replace("vq = \"vq\"", "vq = \"vq_wide\""),
+    );
+    let e = replace_in_holistic_model(
+        Replacements {
+            vq: None,
+            generator: Some(&dir.join("gen_wide_vq")),
+        },
+        &out,
+        &dir.join("y"),
+        "y",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("gen_wide_vq") && e.contains("another autoencoder"),
+        "{e}"
+    );
+    assert!(
+        !dir.join("y").exists(),
         "nothing written for a refused swap"
     );
 

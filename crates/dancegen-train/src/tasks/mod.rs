@@ -12,6 +12,7 @@ pub mod motion_autoencoder;
 pub mod reactdance;
 mod run_feet;
 pub mod soulnet;
+pub mod soulnet_sources;
 pub mod tcdiffpp;
 
 pub use motion_autoencoder::MotionAutoencoderTask;

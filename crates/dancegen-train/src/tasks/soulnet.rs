@@ -32,6 +32,7 @@ pub use dancegen_soulnet::config::{QuantizerKind, VqTable};
 pub type SoulnetVqTable = VqTable;
 
 use super::run_feet::{RunFeet, run_dir_of};
+use super::soulnet_sources as sources;
 use crate::config::{Representation, TrainConfig};
 use crate::data::{Batch, Normalizer};
 use crate::files;
@@ -153,38 +154,20 @@ impl SoulnetVqTask {
     }
 }
 
-/// The part autoencoder in `from` (a `soulnet_vq` run or a holistic bundle) if its
+/// The part autoencoder in `from` (a `soulnet_vq` run or a holistic model) if its
 /// architecture is `table`'s, and the path of its normaliser.
 fn read_vq_weights(
     from: &Path,
     table: &VqTable,
     device: &Device,
 ) -> Result<(PartAutoencoder, PathBuf), String> {
-    use dancegen_soulnet::bundle::{BundleConfig, files as bundle_files};
-    let bundle = from.join(bundle_files::VQ);
-    let (theirs, weights_path, norm_path) = if bundle.is_file() {
-        let p = from.join(bundle_files::MODEL_TOML);
-        let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
-        let b: BundleConfig =
-            toml::from_str(&text).map_err(|e| format!("{}: {}", p.display(), e.message()))?;
-        (b.vq, bundle, from.join(bundle_files::NORMALIZER))
-    } else {
-        let t: VqTable = super::bundle_files::finished_run_config(from, KIND)
-            .map_err(|e| format!("{e} (init_from names a {KIND} run or a holistic model)"))?;
-        (t, from.join(files::WEIGHTS), from.join(files::NORMALIZER))
-    };
+    let (theirs, ae, norm_path) = sources::part_autoencoder(from, device)?;
     if !theirs.same_architecture(table) {
         return Err(format!(
             "{}: its part autoencoder's architecture is not this run's [model]",
             from.display()
         ));
     }
-    let ae = weights::load(
-        table.autoencoder().init(device),
-        &weights_path,
-        Layout::Burn,
-    )
-    .map_err(|e| format!("{}: {e}", weights_path.display()))?;
     Ok((ae, norm_path))
 }
 
@@ -308,10 +291,16 @@ impl TrainTask for SoulnetMmrTask {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MagmTable {
-    /// The finished `soulnet_vq` run (relative to the config file).
+    /// The part autoencoder whose tokens the generator learns: a finished `soulnet_vq` run or
+    /// a holistic model directory (relative to the config file).
     pub vq: PathBuf,
-    /// The finished `soulnet_mmr` run.
+    /// The music encoder's source: a finished `soulnet_mmr` run or a holistic model directory.
     pub mmr: PathBuf,
+    /// The generator to start from (a finished `soulnet_magm` run or a holistic model with the
+    /// same `[generator]` table): training continues from its weights under this run's
+    /// optimiser and schedule. Absent: from scratch.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_from: Option<PathBuf>,
     #[serde(default)]
     pub generator: GeneratorTable,
     /// Weight of SoulNet's training-time MMR alignment loss (its code: 0.5; 0 = off).
@@ -368,7 +357,10 @@ impl SoulnetMagmTask {
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
         let base = path.parent().unwrap_or(Path::new("."));
-        for p in [&mut table.vq, &mut table.mmr] {
+        for p in [&mut table.vq, &mut table.mmr]
+            .into_iter()
+            .chain(table.init_from.as_mut())
+        {
             if p.is_relative() {
                 *p = base.join(&*p);
             }
@@ -378,8 +370,8 @@ impl SoulnetMagmTask {
             .validate()
             .map_err(|r| r.replace("[generator]", "[model.generator]"))?;
         let dev = device::inference();
-        let (vq_table, vq) = load_run(&table.vq, KIND, |t: &VqTable| t.autoencoder().init(&dev))?;
-        let (mmr_table, mmr) = load_run(&table.mmr, MMR, |t: &MmrTable| t.retrieval().init(&dev))?;
+        let (vq_table, vq, _) = sources::part_autoencoder(&table.vq, &dev)?;
+        let (mmr_table, mmr) = sources::retrieval(&table.mmr, None, &dev)?;
         let window = table.generator.window_tokens * vq_table.frames_per_token();
         if config.data.window != window {
             return Err(format!(
@@ -392,18 +384,20 @@ impl SoulnetMagmTask {
         }
         let aligned = if table.mmr_loss_weight > 0.0 {
             let tdev = device::training();
-            let (_, v) = load_run(&table.vq, KIND, |t: &VqTable| t.autoencoder().init(&tdev))?;
-            let (_, m) = load_run(&table.mmr, MMR, |t: &MmrTable| {
-                let mut t = t.clone();
-                t.dropout = 0.0;
-                t.retrieval().init(&tdev)
-            })?;
+            let (_, v, _) = sources::part_autoencoder(&table.vq, &tdev)?;
+            // The MMR without dropout.
+            let (_, m) = sources::retrieval(&table.mmr, Some(0.0), &tdev)?;
             Some((v.no_grad(), m.no_grad()))
         } else {
             None
         };
         table.vq_table = Some(vq_table);
         table.mmr_table = Some(mmr_table);
+        if let Some(from) = &table.init_from {
+            // Fail here, not after the data is read: the generator must be this run's.
+            sources::generator(from, &table.generator, || Self::build(&table, &dev))
+                .map_err(|e| format!("[model] init_from: {e}"))?;
+        }
         Ok(Self {
             table,
             vq,
@@ -415,6 +409,20 @@ impl SoulnetMagmTask {
     fn vq_table(&self) -> &VqTable {
         self.table.vq_table.as_ref().expect("set in from_config")
     }
+
+    /// The empty generator of `table` (its `vq_table` and `mmr_table` filled).
+    fn build(table: &MagmTable, device: &Device) -> PartGenerator {
+        let vq = table.vq_table.as_ref().expect("set in from_config");
+        let d = table
+            .mmr_table
+            .as_ref()
+            .expect("set in from_config")
+            .latent_dim;
+        PartGenerator {
+            masked: table.generator.masked(vq, d).init(device),
+            residual: table.generator.residual(vq, d).map(|c| c.init(device)),
+        }
+    }
 }
 
 impl TrainTask for SoulnetMagmTask {
@@ -425,11 +433,31 @@ impl TrainTask for SoulnetMagmTask {
     }
 
     fn init(&self, device: &Device) -> PartGenerator {
-        let vq = self.vq_table();
-        let d = self.table.mmr_table.as_ref().expect("set").latent_dim;
-        PartGenerator {
-            masked: self.table.generator.masked(vq, d).init(device),
-            residual: self.table.generator.residual(vq, d).map(|c| c.init(device)),
+        Self::build(&self.table, device)
+    }
+
+    /// The tokens are the autoencoder's only if the data is normalised as it was trained.
+    fn check_data(&self, normalizer: &Normalizer) -> Result<(), String> {
+        let (_, _, norm_path) = sources::part_autoencoder(&self.table.vq, &device::inference())
+            .map_err(|e| format!("[model] vq: {e}"))?;
+        let same = super::bundle_files::normalizer_matches(normalizer, &norm_path)
+            .map_err(|e| format!("[model] vq: {e}"))?;
+        if !same {
+            return Err(format!(
+                "[model] vq: {} was trained with another normaliser than this run's data gives \
+                 (the tokens would not be its tokens; use the data set it was trained on)",
+                norm_path.display()
+            ));
+        }
+        Ok(())
+    }
+
+    fn init_with_data(&self, device: &Device, _normalizer: &Normalizer) -> PartGenerator {
+        match &self.table.init_from {
+            None => self.init(device),
+            // Read once in `from_config`, so this does not fail.
+            Some(from) => sources::generator(from, &self.table.generator, || self.init(device))
+                .unwrap_or_else(|e| panic!("[model] init_from: {e}")),
         }
     }
 
@@ -570,12 +598,23 @@ pub fn assemble_holistic_bundle(
     super::bundle_files::write_model_toml(&config, &out.join(bundle_files::MODEL_TOML))
 }
 
-/// The holistic model in `bundle` with its part autoencoder replaced by the finished
-/// `soulnet_vq` run `vq_run` (same architecture, same normaliser: a decoder fine-tuned with
-/// `[model] decoders_only`, say), written to `out` (which may be `bundle` itself): the MMR and
-/// the generator are copied byte for byte, the sampling defaults kept.
-pub fn replace_holistic_autoencoder(
-    vq_run: &Path,
+/// The finished runs that replace networks of a holistic model ([`replace_in_holistic_model`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Replacements<'a> {
+    /// A `soulnet_vq` run of the same architecture: a decoder fine-tuned with `[model]
+    /// decoders_only`, say, so the generator's tokens keep their meaning.
+    pub vq: Option<&'a Path>,
+    /// A `soulnet_magm` run trained on the model's tokens and MMR (`[model] vq` and `mmr` the
+    /// model, or runs of the same architecture): its generator and `[generator]` table.
+    pub generator: Option<&'a Path>,
+}
+
+/// The holistic model in `bundle` with the networks of `runs` replaced, written to `out` (which
+/// may be `bundle` itself). Everything else (the other networks, the normaliser, the sampling
+/// defaults, the model card) is copied byte for byte. Each run must have been trained on data
+/// normalised as the model's; nothing is written on a refusal.
+pub fn replace_in_holistic_model(
+    runs: Replacements<'_>,
     bundle: &Path,
     out: &Path,
     name: &str,
@@ -586,40 +625,100 @@ pub fn replace_holistic_autoencoder(
         path: p.to_path_buf(),
         reason,
     };
+    if runs.vq.is_none() && runs.generator.is_none() {
+        return Err(err(bundle, "no run to put into the model".into()));
+    }
     let mt = bundle.join(bundle_files::MODEL_TOML);
     let text = std::fs::read_to_string(&mt).map_err(|e| crate::TrainError::io(&mt, e))?;
     let mut config: BundleConfig =
         toml::from_str(&text).map_err(|e| err(&mt, e.message().to_string()))?;
     let dev = device::inference();
-    let (vq_table, vq) = load_run(vq_run, KIND, |t: &VqTable| t.autoencoder().init(&dev))
-        .map_err(|r| err(vq_run, r))?;
-    if !vq_table.same_architecture(&config.vq) {
-        return Err(err(
-            vq_run,
-            format!(
-                "its part autoencoder's architecture is not the one {} was trained on",
-                bundle.display()
-            ),
-        ));
-    }
-    let ours = Normalizer::load(&vq_run.join(files::NORMALIZER))?;
-    if !super::bundle_files::normalizer_matches(&ours, &bundle.join(bundle_files::NORMALIZER))? {
-        return Err(err(
-            vq_run,
-            format!(
-                "trained with another normaliser than {}'s",
-                bundle.display()
-            ),
-        ));
-    }
+    let same_normalizer = |run: &Path| -> Result<(), crate::TrainError> {
+        let ours = Normalizer::load(&run.join(files::NORMALIZER))?;
+        if super::bundle_files::normalizer_matches(&ours, &bundle.join(bundle_files::NORMALIZER))? {
+            Ok(())
+        } else {
+            Err(err(
+                run,
+                format!(
+                    "trained with another normaliser than {}'s",
+                    bundle.display()
+                ),
+            ))
+        }
+    };
+    let vq = match runs.vq {
+        None => None,
+        Some(run) => {
+            let (vq_table, vq) = load_run(run, KIND, |t: &VqTable| t.autoencoder().init(&dev))
+                .map_err(|r| err(run, r))?;
+            if !vq_table.same_architecture(&config.vq) {
+                return Err(err(
+                    run,
+                    format!(
+                        "its part autoencoder's architecture is not the one {} was trained on",
+                        bundle.display()
+                    ),
+                ));
+            }
+            same_normalizer(run)?;
+            config.vq = vq_table;
+            Some(vq)
+        }
+    };
+    let generator = match runs.generator {
+        None => None,
+        Some(run) => {
+            let magm: MagmTable = super::bundle_files::finished_run_config(run, MAGM)?;
+            let on_ours = magm
+                .vq_table
+                .as_ref()
+                .is_some_and(|t| t.same_architecture(&config.vq))
+                && magm.mmr_table.as_ref() == Some(&config.mmr);
+            if !on_ours {
+                return Err(err(
+                    run,
+                    format!(
+                        "the generator was trained on another autoencoder or MMR configuration \
+                         than {}'s",
+                        bundle.display()
+                    ),
+                ));
+            }
+            if config.sampling.overlap_tokens >= magm.generator.window_tokens {
+                return Err(err(
+                    run,
+                    format!(
+                        "its window of {} tokens is not longer than {}'s [sampling] \
+                         overlap_tokens {}",
+                        magm.generator.window_tokens,
+                        bundle.display(),
+                        config.sampling.overlap_tokens
+                    ),
+                ));
+            }
+            same_normalizer(run)?;
+            config.generator = magm.generator;
+            let g = weights::load(
+                config.init_generator(&dev),
+                &run.join(files::WEIGHTS),
+                Layout::Burn,
+            )?;
+            Some(g)
+        }
+    };
     // Read everything kept before writing anything: `out` may be `bundle`.
     let mut kept = Vec::new();
-    for file in [
-        bundle_files::MMR,
-        bundle_files::GENERATOR,
-        bundle_files::NORMALIZER,
-        bundle_files::CARD,
+    for (file, replaced) in [
+        (bundle_files::VQ, vq.is_some()),
+        (bundle_files::MMR, false),
+        (bundle_files::GENERATOR, generator.is_some()),
+        (bundle_files::NORMALIZER, false),
+        (bundle_files::CARD, false),
     ] {
+        if replaced {
+            continue;
+        }
         let p = bundle.join(file);
         match std::fs::read(&p) {
             Ok(bytes) => kept.push((file, bytes)),
@@ -628,10 +727,15 @@ pub fn replace_holistic_autoencoder(
         }
     }
     config.name = name.into();
-    config.vq = vq_table;
     std::fs::create_dir_all(out).map_err(|e| crate::TrainError::io(out, e))?;
-    let vp = out.join(bundle_files::VQ);
-    save(&vq, &vp, weights::Storage::F16).map_err(|e| err(&vp, e))?;
+    if let Some(vq) = &vq {
+        let p = out.join(bundle_files::VQ);
+        save(vq, &p, weights::Storage::F16).map_err(|e| err(&p, e))?;
+    }
+    if let Some(g) = &generator {
+        let p = out.join(bundle_files::GENERATOR);
+        save(g, &p, weights::Storage::F16).map_err(|e| err(&p, e))?;
+    }
     for (file, bytes) in kept {
         let dst = out.join(file);
         dancegen_io::write_atomic(&dst, |w| std::io::Write::write_all(w, &bytes))
