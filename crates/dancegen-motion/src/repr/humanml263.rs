@@ -409,6 +409,17 @@ pub(crate) fn decode_ric_rotations(
             }
             _ => fit.rotation,
         };
+        if let Some(prev) = &prev_root {
+            let turn = turn_angle(prev, &root);
+            if turn > FAST_ROOT_TURN {
+                tracing::debug!(
+                    frame = f,
+                    turn_deg = turn.to_degrees(),
+                    margin = fit.margin,
+                    "the decoded root turned fast in one frame"
+                );
+            }
+        }
         prev_root = Some(root);
         trans.extend(root_pos.map(|v| v as f32));
         poses.extend(root.to_axis_angle().map(|v| v as f32));
@@ -435,3 +446,12 @@ const ROOT_TIE_MARGIN: f64 = 0.05;
 /// the training songs (`tools/holistic_sampling_validation.sh`, issue 41 part 8: 0.02 and 0.1
 /// both removed the jumps; the smaller one is kept).
 const ROOT_CONTINUITY: f64 = 0.02;
+
+/// A root turn per frame worth a debug log line (30°: 900°/s at 30 fps).
+const FAST_ROOT_TURN: f64 = std::f64::consts::PI / 6.0;
+
+/// The angle of the rotation between `a` and `b`.
+fn turn_angle(a: &Mat3, b: &Mat3) -> f64 {
+    let d = a.transpose().mul(b).to_axis_angle();
+    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+}
