@@ -75,11 +75,7 @@ impl BundleConfig {
 
     /// The generator's networks (MMR latent as the clip condition).
     pub fn init_generator(&self, device: &Device) -> PartGenerator {
-        let d = self.mmr.latent_dim;
-        PartGenerator {
-            masked: self.generator.masked(&self.vq, d).init(device),
-            residual: self.generator.residual(&self.vq, d).map(|c| c.init(device)),
-        }
+        PartGenerator::init(&self.generator, &self.vq, self.mmr.latent_dim, device)
     }
 }
 

@@ -12,6 +12,8 @@ use dancegen_nn::masked::{MaskedTransformer, corrupt};
 use dancegen_nn::residual_transformer::ResidualTransformer;
 use dancegen_nn::rng::SplitMix64;
 
+use crate::config::{GeneratorTable, VqTable};
+
 /// See the module documentation.
 #[derive(Module, Debug)]
 pub struct PartGenerator {
@@ -101,6 +103,15 @@ pub struct GeneratorLoss {
 }
 
 impl PartGenerator {
+    /// The untrained networks of `table` over `vq`'s tokens, conditioned by `d_cond` values
+    /// per clip (the MMR's latent size).
+    pub fn init(table: &GeneratorTable, vq: &VqTable, d_cond: usize, device: &Device) -> Self {
+        Self {
+            masked: table.masked(vq, d_cond).init(device),
+            residual: table.residual(vq, d_cond).map(|c| c.init(device)),
+        }
+    }
+
     /// Loss on ground-truth `indices` `[B, 3T', Q]` (host ids, from the frozen autoencoder):
     /// MoMask's corruption and cross-entropy on the base level, and the cross-entropy of one
     /// residual level drawn per batch. `seed` drives the corruption, the level and the

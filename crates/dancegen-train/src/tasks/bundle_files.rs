@@ -9,7 +9,8 @@ use serde::de::DeserializeOwned;
 use crate::data::Normalizer;
 use crate::{TrainError, files};
 
-fn config_error(p: &Path, reason: String) -> TrainError {
+/// A configuration error naming `p`.
+pub(crate) fn config_error(p: &Path, reason: String) -> TrainError {
     TrainError::Config {
         path: p.to_path_buf(),
         reason,

@@ -376,10 +376,7 @@ pub fn assemble_duet_bundle(
     use dancegen_reactdance::bundle::{BundleConfig, KIND};
     use dancegen_reactdance::config::SamplingDefaults;
 
-    let err = |p: &Path, reason: String| crate::TrainError::Config {
-        path: p.to_path_buf(),
-        reason,
-    };
+    let err = super::bundle_files::config_error;
     if ldm_run
         .join(dancegen_reactdance::bundle::files::DENOISER)
         .is_file()
@@ -451,10 +448,7 @@ fn replace_bundle_autoencoder(
 ) -> Result<(), crate::TrainError> {
     use dancegen_reactdance::bundle::{BundleConfig, files as bundle_files};
 
-    let err = |p: &Path, reason: String| crate::TrainError::Config {
-        path: p.to_path_buf(),
-        reason,
-    };
+    let err = super::bundle_files::config_error;
     let mt = bundle.join(bundle_files::MODEL_TOML);
     let mut config = BundleConfig::load(&mt).map_err(|e| err(&mt, e.reason))?;
     let dev = device::inference();

@@ -418,10 +418,7 @@ impl SoulnetMagmTask {
             .as_ref()
             .expect("set in from_config")
             .latent_dim;
-        PartGenerator {
-            masked: table.generator.masked(vq, d).init(device),
-            residual: table.generator.residual(vq, d).map(|c| c.init(device)),
-        }
+        PartGenerator::init(&table.generator, vq, d, device)
     }
 }
 
@@ -527,10 +524,7 @@ pub fn assemble_holistic_bundle(
     use dancegen_soulnet::bundle::{BundleConfig, KIND as BUNDLE_KIND, files as bundle_files};
     use dancegen_soulnet::config::SamplingDefaults;
 
-    let err = |p: &Path, reason: String| crate::TrainError::Config {
-        path: p.to_path_buf(),
-        reason,
-    };
+    let err = super::bundle_files::config_error;
     let magm: MagmTable = super::bundle_files::finished_run_config(generator_run, MAGM)?;
     let dev = device::inference();
     let (vq_table, vq) = load_run(vq_run, KIND, |t: &VqTable| t.autoencoder().init(&dev))
@@ -621,10 +615,7 @@ pub fn replace_in_holistic_model(
 ) -> Result<(), crate::TrainError> {
     use dancegen_soulnet::bundle::{BundleConfig, files as bundle_files};
 
-    let err = |p: &Path, reason: String| crate::TrainError::Config {
-        path: p.to_path_buf(),
-        reason,
-    };
+    let err = super::bundle_files::config_error;
     if runs.vq.is_none() && runs.generator.is_none() {
         return Err(err(bundle, "no run to put into the model".into()));
     }
