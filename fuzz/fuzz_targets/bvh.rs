@@ -2,7 +2,7 @@
 //! back. With lossless writing (`precision: None`) the re-parsed file must equal the original.
 #![no_main]
 
-use dancegen_motion::bvh::{BvhReadOptions, BvhWriteOptions, parse_bvh, parse_bvh_bytes, write_bvh};
+use dancegen_formats::bvh::{BvhReadOptions, BvhWriteOptions, parse_bvh, parse_bvh_bytes, write_bvh};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,7 +1,7 @@
 //! Arbitrary bytes → `pickle::parse`: must return `Ok`/`Err`, never panic, hang or abort.
 #![no_main]
 
-use dancegen_motion::pickle::{PickleValue, parse};
+use dancegen_formats::pickle::{PickleValue, parse};
 use libfuzzer_sys::fuzz_target;
 
 /// Touches every value so that lazily-wrong arrays (shape/data mismatches) would trip.

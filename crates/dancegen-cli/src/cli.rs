@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use dancegen_motion::rig::Rig;
+use dancegen_formats::rig::Rig;
 
 #[derive(Parser, Debug)]
 #[command(name = "dancegen", version, about = "Turn music into 3D dance", long_about = None)]
@@ -493,7 +493,7 @@ fn parse_source_fps(s: &str) -> Result<f64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("{s:?} is not a number of frames per second"))?;
-    dancegen_motion::formats::check_source_fps(fps)
+    dancegen_formats::dispatch::check_source_fps(fps)
 }
 
 /// `--rig NAME`, with the presets listed when the name is unknown.

@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use anyhow::Result;
-use dancegen_motion::formats::{
+use dancegen_formats::dispatch::{
     ConvertOptions, LoadOptions, NpzStyle, convert_motion, load_motion_file_with, save_motion_file,
 };
 

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use dancegen_motion::formats::{LoadOptions, load_motion_file_with};
+use dancegen_formats::dispatch::{LoadOptions, load_motion_file_with};
 use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 

@@ -219,7 +219,7 @@ fn mixamo_rig_imports_with_mixamorig_names_where_the_smpl_rig_stands() {
         &["--end", "6", "--seed", "4", "--rig", "mixamo"],
     );
     assert_eq!(smpl, mixamo, "a rig renames bones; the joints do not move");
-    let names = dancegen_motion::rig::Rig::Mixamo.joint_names();
+    let names = dancegen_formats::rig::Rig::Mixamo.joint_names();
     let frames = frames_of(&mixamo);
     for (ext, tol) in [
         ("bvh", BVH_TOLERANCE_M),

@@ -1,6 +1,6 @@
 //! `generate --character`: the user's humanoid glTF dances the dance; characters that cannot
 //! are clear errors naming the file and what is missing. (The retargeting itself is checked
-//! in `dancegen-motion`'s `tests/character_retarget.rs`; Blender imports the result in
+//! in `dancegen-character`'s `tests/character_retarget.rs`; Blender imports the result in
 //! `cli_blender.rs`.)
 
 mod common;

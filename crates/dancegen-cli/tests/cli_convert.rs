@@ -23,7 +23,7 @@ fn aistpp_to_npy_is_metres_y_up_with_pelvis_rest() {
     assert_eq!(a.shape, vec![576, 24, 3]);
     assert_eq!(a.dtype, "<f4");
     // Pelvis = smpl_trans / smpl_scaling + rest pelvis (shared/data/README.md).
-    let m = dancegen_motion::aistpp::load_motion(&src).unwrap();
+    let m = dancegen_formats::aistpp::load_motion(&src).unwrap();
     let rest = [-0.0021f64, -0.2444, 0.0282];
     for f in [0usize, 300, 575] {
         for (ax, r) in rest.iter().enumerate() {
@@ -36,7 +36,7 @@ fn aistpp_to_npy_is_metres_y_up_with_pelvis_rest() {
         }
     }
     // Rotations and offsets are checked against the AIST++ keypoints in
-    // dancegen-motion/tests/aistpp_fk.rs; here the contract's translation convention.
+    // dancegen-formats/tests/aistpp_fk.rs; here the contract's translation convention.
     // --fps 30 halves the frames (stride as the references do).
     let out30 = dir.path().join("j30.npy");
     ok(&dancegen(&[
@@ -66,7 +66,7 @@ fn bvh_to_npy_keeps_file_joints_and_units_or_retargets() {
         "-o",
         raw.to_str().unwrap(),
     ]));
-    let bvh = dancegen_motion::bvh::read_bvh(&src, &Default::default()).unwrap();
+    let bvh = dancegen_formats::bvh::read_bvh(&src, &Default::default()).unwrap();
     let a = dancegen_io::read_npy(&raw).unwrap();
     assert_eq!(a.shape, vec![bvh.frames, bvh.joints.len(), 3]);
     let smpl = dir.path().join("smpl.npy");

@@ -109,7 +109,7 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     let (_, raw) = joints(&dir.path().join("raw.npy"));
     let overlapping = |f: &[f64]| {
         use dancegen_motion::capsule_body::frame_joints;
-        use dancegen_motion::couple_separation::deepest_overlap;
+        use dancegen_refine::couple_separation::deepest_overlap;
         (0..t)
             .filter(|&k| deepest_overlap(&frame_joints(f, k), &frame_joints(&l, k), 0.0).is_some())
             .count()
@@ -121,17 +121,18 @@ fn follower_has_the_leaders_length_and_stays_near_the_leader() {
     );
     // The same leader 5 m further along x: the same follower (same seed), 5 m further.
     let moved = dir.path().join("moved.npz");
-    let mut m =
-        match dancegen_motion::formats::load_motion_file(&dir.path().join("leader.npz")).unwrap() {
-            dancegen_motion::formats::LoadedMotion::Smpl(m) => m,
-            other => panic!("{}", other.kind()),
-        };
+    let mut m = match dancegen_formats::dispatch::load_motion_file(&dir.path().join("leader.npz"))
+        .unwrap()
+    {
+        dancegen_formats::dispatch::LoadedMotion::Smpl(m) => m,
+        other => panic!("{}", other.kind()),
+    };
     for p in m.trans.chunks_exact_mut(3) {
         p[0] += 5.0;
     }
-    dancegen_motion::formats::save_motion_file(
+    dancegen_formats::dispatch::save_motion_file(
         &moved,
-        &dancegen_motion::formats::LoadedMotion::Smpl(m),
+        &dancegen_formats::dispatch::LoadedMotion::Smpl(m),
         &Default::default(),
     )
     .unwrap();

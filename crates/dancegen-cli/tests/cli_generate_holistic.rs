@@ -96,7 +96,7 @@ fn a_holistic_dance_has_fingers_and_a_face_in_every_file() {
     assert!(std_max > 0.01, "face weights nearly constant ({std_max})");
 
     let csv =
-        dancegen_motion::face::livelink_csv::read_file(&dir.path().join("face.csv"), 30.0).unwrap();
+        dancegen_formats::livelink_csv::read_file(&dir.path().join("face.csv"), 30.0).unwrap();
     assert_eq!(csv.frames(), 360);
     let bvh = std::fs::read_to_string(dir.path().join("d.bvh")).unwrap();
     assert!(bvh.contains("left_index1") && bvh.contains("right_thumb3"));

@@ -52,7 +52,7 @@ fn json(path: &Path) -> Value {
 }
 
 fn bvh_header(path: &Path) -> (usize, f64) {
-    let b = dancegen_motion::bvh::read_bvh(path, &Default::default()).unwrap();
+    let b = dancegen_formats::bvh::read_bvh(path, &Default::default()).unwrap();
     (b.frames, b.frame_time)
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 pub enum DatasetError {
     /// A motion file that could not be read or converted (the inner error names the file).
     #[error(transparent)]
-    Motion(#[from] dancegen_motion::formats::FormatError),
+    Motion(#[from] dancegen_formats::dispatch::FormatError),
     /// A song that could not be decoded or analysed (the inner error names the file).
     #[error(transparent)]
     Music(#[from] dancegen_music::MusicError),

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! OUT/motion/<clip>.npz        SMPL 24 motion, 30 fps, Y-up, metres (AMASS-style npz,
-//!                              read back by dancegen_motion::formats::load_motion_file)
+//!                              read back by dancegen_formats::dispatch::load_motion_file)
 //! OUT/music/<clip>.npy         (T, 35) float32 EDGE-35 features at 30 fps, T = motion frames
 //! OUT/leader/<clip>.npz        duet data sets only: the partner the clip's dancer follows
 //! OUT/held_out/{motion,music,leader}/ the same for held-out clips (evaluation only)
@@ -39,17 +39,17 @@ pub mod manifest;
 pub mod takes;
 /// The beat warp lives in the motion crate (the generation library aligns generated dances with
 /// it too); re-exported under its old path.
-pub use dancegen_motion::beat_warp as warp;
+pub use dancegen_refine::beat_warp as warp;
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use dancegen_metrics::FRAME_LEN;
-use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, try_motion_beats};
-use dancegen_motion::formats::{
+use dancegen_formats::dispatch::{
     ConvertOptions, LoadedMotion, NpzStyle, convert_motion, load_motion_file_with, save_motion_file,
 };
+use dancegen_metrics::FRAME_LEN;
+use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, try_motion_beats};
 use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use dancegen_music::FrameMatrix;
 use dancegen_music::decode::AudioSource;
@@ -297,7 +297,7 @@ pub(crate) fn load_units(
     rates: &takes::SourceRates,
 ) -> Result<Vec<MotionUnit>, DatasetError> {
     let given = rates.rate_for(path);
-    let read = dancegen_motion::formats::LoadOptions {
+    let read = dancegen_formats::dispatch::LoadOptions {
         source_fps: given,
         ..Default::default()
     };

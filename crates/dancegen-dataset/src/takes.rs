@@ -37,7 +37,7 @@ impl SourceRates {
             .trim()
             .parse()
             .map_err(|_| format!("{s:?}: {fps:?} is not a number of frames per second"))?;
-        let fps = dancegen_motion::formats::check_source_fps(fps)?;
+        let fps = dancegen_formats::dispatch::check_source_fps(fps)?;
         Ok((key, fps))
     }
 

@@ -3,7 +3,7 @@
 mod common;
 
 use dancegen_dataset::{BuildOptions, ClipEntry, Pairing, build, summary_table};
-use dancegen_motion::formats::{LoadedMotion, load_motion_file};
+use dancegen_formats::dispatch::{LoadedMotion, load_motion_file};
 use dancegen_motion::repr::motion::SmplMotion;
 
 /// `mirror` with duet pairing adds each training couple's mirror image as a couple: both

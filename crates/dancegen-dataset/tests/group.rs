@@ -7,8 +7,8 @@ use std::collections::BTreeSet;
 
 use dancegen_dataset::group::GroupOptions;
 use dancegen_dataset::{BuildOptions, DatasetError, Manifest, Pairing, build};
-use dancegen_motion::formation::order_left_to_right;
-use dancegen_motion::formats::{LoadedMotion, load_motion_file};
+use dancegen_formats::dispatch::{LoadedMotion, load_motion_file};
+use dancegen_refine::formation::order_left_to_right;
 
 fn options(out: &std::path::Path, song: std::path::PathBuf) -> BuildOptions {
     let mut o = BuildOptions::pseudo(

@@ -9,9 +9,8 @@ use dancegen_dataset::holistic_synth::hands::{HandContext, pose_scores};
 use dancegen_dataset::holistic_synth::{
     FaceInputs, SynthInputs, synthesize_face, synthesize_hands,
 };
-use dancegen_motion::aistpp::load_motion;
+use dancegen_formats::aistpp::load_motion;
 use dancegen_motion::face::arkit::{ARKIT_COUNT, arkit_index};
-use dancegen_motion::repr::SmplMotion;
 
 /// EDGE-35 columns: onset envelope 0, chroma 21..33.
 const ONSET: usize = 0;
@@ -26,7 +25,10 @@ struct Clip {
 
 fn clip() -> Clip {
     let path = common::aistpp_motions().join("gJS_sFM_cAll_d02_mJS4_ch09.pkl");
-    let m = SmplMotion::from_aistpp(&load_motion(&path).unwrap()).resample_stride(2);
+    let m = load_motion(&path)
+        .unwrap()
+        .to_smpl_motion()
+        .resample_stride(2);
     let joints = m.joints_world().unwrap();
     let song = Song::analyse(&common::song("metal_madness.ogg")).unwrap();
     let t = m.frames().min(song.frames());

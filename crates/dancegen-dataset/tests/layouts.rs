@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 
 use dancegen_dataset::{BuildOptions, Manifest, Pairing, PairingKind, build};
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_formats::dispatch::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
 use dancegen_motion::repr::finedance::FineDance315;
 
 const D04: &str = "gBR_sBM_cAll_d04_mBR2_ch08";

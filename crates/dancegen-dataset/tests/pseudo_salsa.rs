@@ -4,7 +4,7 @@ mod common;
 
 use dancegen_dataset::warp::MAX_TEMPO_CHANGE;
 use dancegen_dataset::{BuildOptions, DatasetError, Manifest, PairingKind, build, summary_table};
-use dancegen_motion::formats::{LoadedMotion, load_motion_file};
+use dancegen_formats::dispatch::{LoadedMotion, load_motion_file};
 
 /// Both partners of CMU salsa take `take` (`60_<take>`, `61_<take>`) with `songs`, the `61`
 /// partner held out.

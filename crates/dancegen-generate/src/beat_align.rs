@@ -2,7 +2,7 @@
 //! the dance is time-warped so that its kinematic beats land on the song's beats (solo) or on
 //! the leader's (duet: a partner's accents echo the leader's), with the same
 //! monotone piecewise-linear map and the same ±15 % limit on the local playback speed that pair
-//! real motion with songs in the training set (`dancegen_motion::beat_warp`). The dance keeps
+//! real motion with songs in the training set (`dancegen_refine::beat_warp`). The dance keeps
 //! its length: its first and last frames stay where they are.
 //!
 //! Why: a model trained on beat-warped motion still places its velocity minima only roughly on
@@ -16,8 +16,8 @@
 use dancegen_metrics::FeatureError;
 use dancegen_metrics::bas::{Variant, beat_align_score, try_motion_beats};
 use dancegen_metrics::duet::duet_motion_beats;
-use dancegen_motion::beat_warp::{TimeMap, WarpParams, match_beats_in_span, warp_motion};
 use dancegen_motion::repr::SmplMotion;
+use dancegen_refine::beat_warp::{TimeMap, WarpParams, match_beats_in_span, warp_motion};
 
 /// Alignment passes at most. The first moves the kinematic beats onto the target beats; the
 /// warp itself then shifts some of them (the playback speed changes at each anchor, which moves

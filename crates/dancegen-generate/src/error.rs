@@ -26,7 +26,7 @@ pub enum GenerateError {
     #[error(transparent)]
     Music(#[from] dancegen_music::error::MusicError),
     #[error(transparent)]
-    Motion(#[from] dancegen_motion::formats::FormatError),
+    Motion(#[from] dancegen_formats::dispatch::FormatError),
     #[error(transparent)]
     Render(#[from] dancegen_render::RenderError),
     /// An output could not be written (names the output file, not the staging copy).

@@ -1,7 +1,7 @@
 //! Every output format a dance can be written to, chosen by extension, and the staging that
 //! makes a job's outputs appear all together or not at all.
 //!
-//! Motion files go through `dancegen_motion::formats::save_motion_file`, a holistic dance's
+//! Motion files go through `dancegen_formats::dispatch::save_motion_file`, a holistic dance's
 //! (body, fingers and face; `.csv` is its face) through the `holistic` module; previews are
 //! drawn by `dancegen_render` (MP4 with the danced part of the song as its sound track). Every
 //! file is first written into a hidden staging folder next to its destination and renamed into
@@ -11,9 +11,9 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use dancegen_motion::character::{self, Character};
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, save_motion_file};
-use dancegen_motion::gltf::DancerAnimation;
+use dancegen_character::{self as character, Character};
+use dancegen_formats::dispatch::{ConvertOptions, LoadedMotion, save_motion_file};
+use dancegen_formats::gltf::DancerAnimation;
 use dancegen_motion::skeleton::Skeleton;
 use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
 
@@ -455,8 +455,8 @@ fn write_group_json(
     out: &Path,
     motion: &LoadedMotion,
     g: &GroupReport,
-) -> Result<(), dancegen_motion::formats::FormatError> {
-    let (shape, positions) = dancegen_motion::formats::joint_positions(out, motion)?;
+) -> Result<(), dancegen_formats::dispatch::FormatError> {
+    let (shape, positions) = dancegen_formats::dispatch::joint_positions(out, motion)?;
     let s = Skeleton::smpl24();
     let v = serde_json::json!({
         "fps": FPS,
@@ -478,7 +478,7 @@ fn write_group_json(
     dancegen_io::write_atomic(out, |w| {
         serde_json::to_writer(&mut *w, &v).map_err(std::io::Error::other)
     })
-    .map_err(|e| dancegen_motion::formats::FormatError {
+    .map_err(|e| dancegen_formats::dispatch::FormatError {
         path: out.to_path_buf(),
         reason: e.to_string(),
     })

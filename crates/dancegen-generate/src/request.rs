@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-pub use dancegen_motion::character::Character;
-pub use dancegen_motion::rig::Rig;
+pub use dancegen_character::Character;
+pub use dancegen_formats::rig::Rig;
 
 use crate::systems::duet::DuetOptions;
 use crate::systems::group::GroupOptions;

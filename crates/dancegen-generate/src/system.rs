@@ -76,7 +76,7 @@ pub struct HolisticParts {
     pub flame: Option<Vec<f32>>,
 }
 
-/// A group dance's stage record (stage frame of `dancegen_motion::formation`: `[x, z]`
+/// A group dance's stage record (stage frame of `dancegen_refine::formation`: `[x, z]`
 /// metres, x to the audience's right, +z towards the audience).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct GroupReport {

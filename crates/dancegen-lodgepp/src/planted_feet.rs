@@ -1,6 +1,6 @@
 //! Post-processing of planted feet on generated raw frames `[T, 151]`: the root stops gliding
-//! with the support foot ([`lock_planted_feet`], `dancegen_motion::foot_lock`), then leg IK
-//! pins every planted ankle and toe ([`pin_planted_feet`], `dancegen_motion::foot_ik`).
+//! with the support foot ([`lock_planted_feet`], `dancegen_refine::foot_lock`), then leg IK
+//! pins every planted ankle and toe ([`pin_planted_feet`], `dancegen_refine::foot_ik`).
 //! Neither is part of Lodge++; `--no-foot-lock` switches both off.
 //!
 //! Which feet are planted is a [`PlantedRule`] over two signals: the model's contact channel
@@ -11,11 +11,11 @@
 //! footwork: in the 29 real salsa/AIST++ clips of the solo set a foot is within those heights
 //! in 76 % of frames while moving at 0.98 m/s on average (issue 16, docs/solo-data-v2.md).
 
-use dancegen_motion::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
-use dancegen_motion::foot_lock::{Axes, PLANTED, height_contacts, leashed, planted_feet_offsets};
 use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use dancegen_nn::loss::FkSkeleton;
+use dancegen_refine::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
+use dancegen_refine::foot_lock::{Axes, PLANTED, height_contacts, leashed, planted_feet_offsets};
 
 use crate::foot_refine::CONTACT_HEIGHT;
 use crate::kinematics::{host_skeleton, joints_host};
@@ -34,7 +34,7 @@ pub const IK_BLEND_FRAMES: usize = 4;
 pub const ROOT_LOCK_SMOOTHING_FRAMES: f64 = 2.0;
 
 /// When a foot counts as planted (defined with the root lock it feeds).
-pub use dancegen_motion::foot_lock::PlantedRule;
+pub use dancegen_refine::foot_lock::PlantedRule;
 
 /// Both passes: root lock, then leg IK ([`PlantedRule::Either`]).
 pub fn clean_planted_feet(frames: &mut [f32]) -> FootIkReport {

@@ -458,7 +458,7 @@ fn leg_ik_holds_both_planted_feet_when_one_leg_swings() {
     // A body standing with bent knees, both feet labelled planted; the right hip turns a
     // little more every frame, so its foot slides. The root lock can hold one foot; the leg IK
     // holds the other. (A straight leg cannot reach a moved target: that case is reported as
-    // unreached, see dancegen_motion::foot_ik.)
+    // unreached, see dancegen_refine::foot_ik.)
     let t = 24;
     let mut frames = Vec::with_capacity(t * DIMS);
     let set = |fr: &mut [f32], j: usize, m: Mat3| {

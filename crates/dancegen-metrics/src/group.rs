@@ -475,7 +475,7 @@ pub fn min_root_distance(dancers: &[&[f64]]) -> Result<Option<f64>, FeatureError
 }
 
 /// Share of frames (in `[0, 1]`) with a **collision**: two dancers whose roots are closer than
-/// `dancegen_motion::formation::MIN_SEPARATION_M` horizontally, or whose capsule bodies
+/// `dancegen_refine::formation::MIN_SEPARATION_M` horizontally, or whose capsule bodies
 /// intersect ([`bodies_intersect`], TIF's bodies). Group.md P10's collision-TIF; every pair
 /// counts (generated dancers have no partners). `None` for zero frames.
 pub fn collision_share(
@@ -486,7 +486,7 @@ pub fn collision_share(
     if frames == 0 {
         return Ok(None);
     }
-    let min = dancegen_motion::formation::MIN_SEPARATION_M;
+    let min = dancegen_refine::formation::MIN_SEPARATION_M;
     let hits = (0..frames)
         .filter(|&t| {
             (0..dancers.len()).any(|a| {

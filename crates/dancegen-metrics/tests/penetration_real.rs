@@ -6,18 +6,18 @@
 //! small: asserted < 5 % for every AIST++ sequence and for the salsa mean. A single salsa
 //! recording may reach a little more (measured up to ≈ 5.1 %, hands clasped in front of the
 //! chest): it is retargeted from a skeleton with other proportions (≈ 7 cm mean joint error,
-//! `dancegen-motion/tests/retarget.rs`), so arms land a few centimetres off; bound 10 %.
+//! `dancegen-formats/tests/retarget.rs`), so arms land a few centimetres off; bound 10 %.
 //! Values are printed (`--nocapture`).
 
 use std::path::PathBuf;
 
+use dancegen_formats::aistpp::load_motion;
+use dancegen_formats::bvh::{BvhReadOptions, read_bvh};
+use dancegen_formats::bvh_motion::smpl_fk_f64;
+use dancegen_formats::retarget::retarget_poser_to_smpl;
 use dancegen_metrics::penetration::{
     DEFAULT_SAMPLES_PER_SEGMENT, capsule_penetration_depth, capsule_penetration_ratio,
 };
-use dancegen_motion::aistpp::load_motion;
-use dancegen_motion::bvh::{BvhReadOptions, read_bvh};
-use dancegen_motion::bvh_motion::smpl_fk_f64;
-use dancegen_motion::retarget::retarget_poser_to_smpl;
 
 /// Upper bound on the ratio of real motion (module docs).
 const REAL_MAX_PERCENT: f64 = 5.0;

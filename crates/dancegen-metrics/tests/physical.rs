@@ -1,8 +1,8 @@
 //! The physical-plausibility figures on motions whose answers are known: the SMPL rest body
 //! standing, floating, gliding, teleporting, stepping and with its legs crossed.
 
+use dancegen_formats::bvh_motion::smpl_fk_f64;
 use dancegen_metrics::physical::{SPIKE_SPEED_MS, count_steps, physical, shins_crossed};
-use dancegen_motion::bvh_motion::smpl_fk_f64;
 
 const FPS: f64 = 30.0;
 

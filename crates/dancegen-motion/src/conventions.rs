@@ -17,7 +17,7 @@
 //!   (ankles 7/8, toes 10/11) of a planted foot has height 0, as LODGE's and EDGE's grounding
 //!   put it (the SMPL toe joint sits at the ball of the foot, a few centimetres above the
 //!   sole, so a mesh foot sinks that much; the capsule body's foot likewise). Retargeting
-//!   ([`crate::formats::convert_motion`] to SMPL 24) and the training sets put each take's
+//!   (`dancegen_formats::dispatch::convert_motion` to SMPL 24) and the training sets put each take's
 //!   resting feet there ([`crate::repr::motion::planted_floor_height`]); generated motion is
 //!   grounded the same way. Raw imports that keep their recording's world frame (AIST++
 //!   `.pkl`, SMPL `.npz`) are left where they are.

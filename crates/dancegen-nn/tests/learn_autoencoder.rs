@@ -14,7 +14,7 @@
 
 use std::path::PathBuf;
 
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_formats::dispatch::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
 use dancegen_nn::autoencoder::{MotionAutoencoder, MotionAutoencoderConfig};
 use dancegen_nn::burn::module::Module;
 use dancegen_nn::burn::optim::{AdamWConfig, GradientsParams};

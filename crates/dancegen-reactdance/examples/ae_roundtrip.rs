@@ -6,7 +6,7 @@
 //! `KEEP`: streams (`upper`, `lower`, `root`, comma-separated) written back from the input
 //! instead of the reconstruction, to see which stream's reconstruction makes an error.
 
-use dancegen_motion::formats::{LoadedMotion, load_motion_file};
+use dancegen_formats::dispatch::{LoadedMotion, load_motion_file};
 use dancegen_motion::repr::{DuetFollower, SmplMotion};
 use dancegen_nn::burn::tensor::{Tensor, TensorData};
 use dancegen_nn::device;

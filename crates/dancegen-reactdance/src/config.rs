@@ -7,8 +7,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use dancegen_motion::foot_lock::PlantedRule;
 use dancegen_motion::repr::{DuetFollower, DuetLeader};
+use dancegen_refine::foot_lock::PlantedRule;
 
 /// Motion frames per latent token: the conv encoder halves the frame rate `down_t` times.
 pub fn frames_per_token(down_t: usize) -> usize {

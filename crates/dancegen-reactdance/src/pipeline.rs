@@ -7,7 +7,7 @@
 //!    de-normalised, and put into the leader's world frame ([`DuetFollower::decode`]).
 //! 4. Unless turned off, the follower is moved out of the leader's body where the two
 //!    interpenetrate, by a smooth horizontal offset of its root
-//!    ([`dancegen_motion::couple_separation`]; hands may touch). Not in the paper: the model
+//!    ([`dancegen_refine::couple_separation`]; hands may touch). Not in the paper: the model
 //!    places the follower from a learned relative position, and at partner distance its
 //!    centimetre errors put trunks through each other (docs/duet-eval.md measures both).
 //!
@@ -18,12 +18,12 @@
 
 use std::time::Instant;
 
-use dancegen_motion::couple_separation::{SeparationConfig, separation_offsets};
 use dancegen_motion::repr::motion::{GroundMode, planted_floor_height};
 use dancegen_motion::repr::{DuetFollower, DuetLeader, SmplMotion};
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::diffusion::{BetaSchedule, Schedule};
 use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
+use dancegen_refine::couple_separation::{SeparationConfig, separation_offsets};
 
 use crate::blc::{LatentSampling, sample_latent_hooked};
 use crate::bundle::DuetModel;
@@ -89,7 +89,7 @@ impl From<String> for FollowerError {
 }
 
 /// Moves `follower` horizontally out of `leader`'s body (the couple separation,
-/// [`dancegen_motion::couple_separation`]); returns the largest offset, metres. Both dancers in
+/// [`dancegen_refine::couple_separation`]); returns the largest offset, metres. Both dancers in
 /// the same world frame.
 pub fn separate_follower(
     follower: &mut SmplMotion,

@@ -150,7 +150,7 @@ fn too_little_music_is_an_error() {
 /// Frames in which the two bodies interpenetrate (hands exempt), on world joints.
 fn penetrating_frames(a: &SmplMotion, b: &SmplMotion) -> usize {
     use dancegen_motion::capsule_body::frame_joints;
-    use dancegen_motion::couple_separation::deepest_overlap;
+    use dancegen_refine::couple_separation::deepest_overlap;
     let j = |m: &SmplMotion| -> Vec<f64> {
         m.joints_world()
             .unwrap()
@@ -166,7 +166,7 @@ fn penetrating_frames(a: &SmplMotion, b: &SmplMotion) -> usize {
 
 #[test]
 fn separation_moves_the_follower_out_of_the_leader_and_changes_nothing_else() {
-    use dancegen_motion::couple_separation::SeparationConfig;
+    use dancegen_refine::couple_separation::SeparationConfig;
     let m = model();
     let dev = device::inference();
     let l = leader(48);

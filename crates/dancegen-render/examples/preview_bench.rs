@@ -20,7 +20,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use dancegen_motion::formats::{ConvertOptions, convert_motion, load_motion_file};
+use dancegen_formats::dispatch::{ConvertOptions, convert_motion, load_motion_file};
 use dancegen_render::{DancerTrack, RenderOptions, RgbImage, Scene, tracks_from_motion, write};
 
 /// The README command's song is 45 s long; its preview holds 45 s × 30 fps frames.

@@ -27,7 +27,7 @@ pub use scene::{DancerTrack, RenderOptions, Scene};
 
 use std::path::Path;
 
-use dancegen_motion::formats::{LoadedMotion, joint_positions};
+use dancegen_formats::dispatch::{LoadedMotion, joint_positions};
 use dancegen_motion::skeleton::Skeleton;
 
 /// Why a clip could not be rendered or written.
@@ -46,7 +46,7 @@ pub enum RenderError {
     #[error(transparent)]
     Write(#[from] dancegen_io::atomic::WriteError),
     #[error(transparent)]
-    Motion(#[from] dancegen_motion::formats::FormatError),
+    Motion(#[from] dancegen_formats::dispatch::FormatError),
     #[error("{0}")]
     Io(#[from] std::io::Error),
 }

@@ -91,7 +91,7 @@ pub fn shift_roots(frames: &mut [f32], n: usize, offset: [f32; 2]) {
 }
 
 /// Stage x of a Z-up root: EDGE keeps Y-up x as Z-up x (`conventions::yup_to_zup_point`), and
-/// the stage's x is the world's (`dancegen_motion::formation`).
+/// the stage's x is the world's (`dancegen_refine::formation`).
 pub const STAGE_X: usize = ROOT_HORIZONTAL[0];
 
 /// The slot order that sorts dancers left to right by stage x at frame 0 (ties by index), for

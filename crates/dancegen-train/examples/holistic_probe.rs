@@ -389,10 +389,10 @@ fn write_body(rows: &[f32], path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     body.put_feet_on_tracked_floor()
         .map_err(|e| e.to_string())?;
-    dancegen_motion::smpl_npz::write_smpl_npz(
+    dancegen_formats::smpl_npz::write_smpl_npz(
         path,
         &body,
-        &dancegen_motion::smpl_npz::SmplNpzOptions::default(),
+        &dancegen_formats::smpl_npz::SmplNpzOptions::default(),
     )
     .map_err(|e| e.to_string())
 }

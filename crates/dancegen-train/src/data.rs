@@ -1,6 +1,6 @@
 //! Windowed motion (+ optional music features) for training.
 //!
-//! Every motion file is read with `dancegen_motion::formats::load_motion_file` (BVH retargeted
+//! Every motion file is read with `dancegen_formats::dispatch::load_motion_file` (BVH retargeted
 //! to SMPL 24, group files split per dancer), resampled to the configured frame rate and
 //! encoded to the configured representation: one clip of `(T, dims)` per dancer. Windows of
 //! `window` frames start every `stride` frames (EDGE: 150 / 15 at 30 fps, `data/slice.py`;
@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
+use dancegen_formats::dispatch::{ConvertOptions, LoadedMotion, convert_motion, load_motion_file};
 use dancegen_motion::repr::{
     DuetFollower, DuetLeader, Edge151, Holistic623, HumanMl263, Lodge139, MinMaxNormalizer,
     SmplMotion,
@@ -213,9 +213,9 @@ pub fn representation_dims(r: Representation) -> usize {
 pub const HOLISTIC_DIMS: usize =
     dancegen_motion::repr::holistic::split::BODY_HAND_DIMS + dancegen_motion::face::ARKIT_COUNT;
 
-/// Dancer slots of a group frame (TCDiff++'s N_max; `dancegen_motion::formation` templates go
+/// Dancer slots of a group frame (TCDiff++'s N_max; `dancegen_refine::formation` templates go
 /// up to the same count).
-pub const GROUP_SLOTS: usize = dancegen_motion::formation::shapes::MAX_DANCERS;
+pub const GROUP_SLOTS: usize = dancegen_refine::formation::shapes::MAX_DANCERS;
 
 /// Per-channel mean and std of one dancer's EDGE-151 frames over the active slots of group
 /// clips, roots relative to each clip's frame-0 centroid (group.md §5 P3: fitted once on the

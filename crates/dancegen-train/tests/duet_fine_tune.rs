@@ -7,8 +7,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use dancegen_formats::smpl_npz::{SmplNpzOptions, write_smpl_npz};
 use dancegen_motion::repr::SmplMotion;
-use dancegen_motion::smpl_npz::{SmplNpzOptions, write_smpl_npz};
 use dancegen_nn::burn::module::{Module, ModuleVisitor, Param};
 use dancegen_nn::burn::tensor::Tensor;
 use dancegen_nn::device;

@@ -117,13 +117,13 @@ fn read_raw(path: &Path, source_fps: Option<f64>) -> Result<Raw> {
             _ => {}
         }
     }
-    let read = dancegen_motion::formats::LoadOptions {
+    let read = dancegen_formats::dispatch::LoadOptions {
         source_fps,
         ..Default::default()
     };
-    let m = dancegen_motion::formats::load_motion_file_with(path, &read)?;
+    let m = dancegen_formats::dispatch::load_motion_file_with(path, &read)?;
     let fps = f64::from(m.fps());
-    let (shape, p) = dancegen_motion::formats::joint_positions(path, &m)?;
+    let (shape, p) = dancegen_formats::dispatch::joint_positions(path, &m)?;
     let p: Vec<f64> = p.into_iter().map(f64::from).collect();
     // A raw-joints .npy stores no frame rate even when the library reads it.
     let file_fps = (!is_npy).then_some(fps);

@@ -3,7 +3,7 @@
 use dancegen_metrics::FRAME_LEN;
 use dancegen_metrics::foot_skating::foot_skating_ratio;
 use dancegen_metrics::group::{CapsuleRadii, bodies_intersect};
-use dancegen_motion::formation::MIN_SEPARATION_M;
+use dancegen_refine::formation::MIN_SEPARATION_M;
 
 /// A composition may add at most this much to a dancer's foot-skating ratio (LODGE's ratio of
 /// sliding contact frames, [`foot_skating_ratio`]) over the same warped motion before it was

@@ -41,13 +41,13 @@ mod plan;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
+use dancegen_formats::dispatch::{ConvertOptions, LoadedMotion, NpzStyle, save_motion_file};
 use dancegen_metrics::FRAME_LEN;
-use dancegen_motion::formation::shapes::Shape;
-use dancegen_motion::formation::{StagePos, order_left_to_right};
-use dancegen_motion::formats::{ConvertOptions, LoadedMotion, NpzStyle, save_motion_file};
 use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
 use dancegen_motion::rng::SplitMix64;
 use dancegen_music::features::EDGE35_DIM;
+use dancegen_refine::formation::shapes::Shape;
+use dancegen_refine::formation::{StagePos, order_left_to_right};
 use rayon::prelude::*;
 
 use crate::duet::{couple_key, slice};

@@ -4,11 +4,11 @@
 //! partners' real offsets about their common low-pass midpoint, turned as one so the partners
 //! stand side by side across the stage.
 
-use dancegen_motion::formation::StagePos;
 use dancegen_motion::repr::duet::heading;
 use dancegen_motion::repr::motion::SmplMotion;
 use dancegen_motion::rotation::{Mat3, wrap_angle};
 use dancegen_motion::smoothing::{Ends, gaussian_smooth};
+use dancegen_refine::formation::StagePos;
 
 /// Gaussian σ (frames at 30 fps) of the low-pass path: a Gaussian's half-power frequency is
 /// `√ln2 / (2π σ)`, so σ = 8 frames (0.27 s) puts it at 0.5 Hz (group.md §4.6).

@@ -1,11 +1,11 @@
 //! The formation plan of one composed group sample: where each member (a solo dancer or a
 //! couple) stands on every frame, with transitions on phrase boundaries (group.md §4.3–4.4).
 
-use dancegen_motion::formation::assign::{assign_slots, targets};
-use dancegen_motion::formation::shapes::{Shape, positions};
-use dancegen_motion::formation::transition::{TransitionKind, plan_transition, swap_targets};
-use dancegen_motion::formation::{StagePos, order_left_to_right};
 use dancegen_motion::rng::SplitMix64;
+use dancegen_refine::formation::assign::{assign_slots, targets};
+use dancegen_refine::formation::shapes::{Shape, positions};
+use dancegen_refine::formation::transition::{TransitionKind, plan_transition, swap_targets};
+use dancegen_refine::formation::{StagePos, order_left_to_right};
 
 /// Slot jitter σ (metres): group.md §4.3 gives 0.05–0.1 m; we draw σ in that range per sample.
 const JITTER_SIGMA_M: (f64, f64) = (0.05, 0.1);
@@ -83,7 +83,7 @@ fn template(
 
 fn too_close(slots: &[StagePos], min: f64) -> bool {
     (0..slots.len()).any(|i| {
-        (i + 1..slots.len()).any(|j| dancegen_motion::formation::distance(slots[i], slots[j]) < min)
+        (i + 1..slots.len()).any(|j| dancegen_refine::formation::distance(slots[i], slots[j]) < min)
     })
 }
 
@@ -160,7 +160,7 @@ pub(crate) fn plan_formation(
         let far = current
             .iter()
             .zip(&target)
-            .map(|(a, b)| dancegen_motion::formation::distance(*a, *b))
+            .map(|(a, b)| dancegen_refine::formation::distance(*a, *b))
             .fold(0.0, f64::max);
         let needed = (MIN_JERK_PEAK * far * PLAN_FPS / MAX_PATH_SPEED_M_S).ceil() as usize;
         let len = len.max(needed);
@@ -174,7 +174,7 @@ pub(crate) fn plan_formation(
             .iter()
             .flat_map(|p| {
                 p.windows(2)
-                    .map(|w| dancegen_motion::formation::distance(w[0], w[1]))
+                    .map(|w| dancegen_refine::formation::distance(w[0], w[1]))
             })
             .fold(0.0, f64::max);
         if step_max * PLAN_FPS > 1.5 * MAX_PATH_SPEED_M_S {
@@ -280,7 +280,7 @@ mod tests {
             // Paths are continuous and walkable: no step above 3 m/s.
             for p in &plan.paths {
                 for w in p.windows(2) {
-                    assert!(dancegen_motion::formation::distance(w[0], w[1]) * PLAN_FPS <= 3.0);
+                    assert!(dancegen_refine::formation::distance(w[0], w[1]) * PLAN_FPS <= 3.0);
                 }
             }
         }

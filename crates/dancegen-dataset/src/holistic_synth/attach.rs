@@ -15,9 +15,9 @@
 
 use std::path::Path;
 
+use dancegen_formats::dispatch::{LoadedMotion, load_motion_file};
 use dancegen_io::NpyData;
 use dancegen_motion::face::ARKIT_COUNT;
-use dancegen_motion::formats::{LoadedMotion, load_motion_file};
 use dancegen_music::features::EDGE35_DIM;
 use rayon::prelude::*;
 

@@ -1,7 +1,7 @@
 //! The files of a holistic dance: body, fingers and face ([`HolisticParts`]).
 //!
 //! Kept out of `output.rs` because every other dance is written from its SMPL 24 bodies
-//! through `dancegen_motion::formats`, while a holistic dance is written from its SMPL-H 52
+//! through `dancegen_formats::dispatch`, while a holistic dance is written from its SMPL-H 52
 //! rotations and its ARKit face, which those single-body writers do not take. `output.rs` only
 //! routes every non-preview file of a holistic dance here.
 //!
@@ -23,17 +23,18 @@
 
 use std::path::Path;
 
-use dancegen_motion::bvh::{BvhWriteOptions, write_bvh_file};
-use dancegen_motion::bvh_motion::skeleton_motion_to_bvh;
-use dancegen_motion::face::{ARKIT_NAMES, livelink_csv};
-use dancegen_motion::fbx::{FbxOptions, write_fbx};
+use dancegen_formats::bvh::{BvhWriteOptions, write_bvh_file};
+use dancegen_formats::bvh_motion::skeleton_motion_to_bvh;
+use dancegen_formats::dispatch::LoadedMotion;
+use dancegen_formats::fbx::{FbxOptions, write_fbx};
+use dancegen_formats::gltf::{DancerAnimation, FaceAnimation, GlbOptions, write_glb_with_face};
+use dancegen_formats::livelink_csv;
+use dancegen_formats::rig::Rig;
+use dancegen_formats::smpl_npz::{BODY_JOINTS, SMPLH_JOINTS, SmplNpzOptions, write_smplh_npz};
+use dancegen_motion::face::ARKIT_NAMES;
 use dancegen_motion::fk::fk_axis_angle_f32;
-use dancegen_motion::formats::LoadedMotion;
-use dancegen_motion::gltf::{DancerAnimation, FaceAnimation, GlbOptions, write_glb_with_face};
 use dancegen_motion::repr::motion::SmplMotion;
-use dancegen_motion::rig::Rig;
 use dancegen_motion::skeleton::{SMPLH52_NAMES, SMPLH52_PARENTS, Skeleton};
-use dancegen_motion::smpl_npz::{BODY_JOINTS, SMPLH_JOINTS, SmplNpzOptions, write_smplh_npz};
 
 use super::{OutputFormat, about_dest};
 use crate::error::GenerateError;

@@ -7,17 +7,17 @@
 
 use std::path::Path;
 
-use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
-use dancegen_motion::couple_separation::SeparationConfig;
-use dancegen_motion::formats::{
+use dancegen_formats::dispatch::{
     ConvertOptions, LoadOptions, LoadedMotion, convert_motion, load_motion_file_with,
 };
+use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 use dancegen_reactdance::blc::{LatentSampling, LongForm};
 use dancegen_reactdance::bundle::DuetModel;
 use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked, separate_follower};
+use dancegen_refine::couple_separation::SeparationConfig;
 
 use crate::beat_align::align_follower_to_leader;
 use crate::error::GenerateError;

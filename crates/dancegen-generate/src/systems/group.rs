@@ -1,5 +1,5 @@
 //! Group: 2–5 dancers from one song (TCDiff++, `dancegen_tcdiffpp`), free or following a
-//! choreographer's formation (`FORMATION.json`, `dancegen_motion::formation::keyframes`).
+//! choreographer's formation (`FORMATION.json`, `dancegen_refine::formation::keyframes`).
 //!
 //! The model samples every dancer at once ([`dancegen_tcdiffpp::sampler::generate`]: LGDS or
 //! the parallel long-form sampler, formation paths injected as clean roots). Then, per dancer,
@@ -12,13 +12,13 @@
 use std::path::Path;
 
 use dancegen_lodgepp::planted_feet::{clean_planted_feet, pin_planted_feet};
-use dancegen_motion::couple_separation::{SeparationConfig, group_separation_offsets};
-use dancegen_motion::formation::keyframes::Formation;
-use dancegen_motion::formation::{StagePos, order_left_to_right};
 use dancegen_motion::repr::motion::{GroundMode, POSE_DIMS};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
+use dancegen_refine::couple_separation::{SeparationConfig, group_separation_offsets};
+use dancegen_refine::formation::keyframes::Formation;
+use dancegen_refine::formation::{StagePos, order_left_to_right};
 use dancegen_tcdiffpp::bundle::GroupModel;
 pub use dancegen_tcdiffpp::config::LongSampler;
 use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, N_MIN};

@@ -10,7 +10,7 @@
 //!
 //! Decoding drops the contacts (see [`Edge151::contacts`]) and converts back to the canonical
 //! Y-up [`SmplMotion`]. Note: EDGE's root translation is AIST++ `smpl_trans / scaling`
-//! (see [`SmplMotion::from_aistpp_edge`]).
+//! (see `AistppMotion::to_smpl_motion_edge` in `dancegen-formats`).
 
 use super::motion::{EDGE_CONTACT_VELOCITY, POSE_DIMS, SMPL_JOINTS, contacts_velocity};
 use super::{ReprError, SmplMotion, check_fps, frames_of};

@@ -7,7 +7,6 @@
 //! position as stored (metres, Y-up, 30 fps; C.5).
 
 use super::{Edge151, ReprError, SmplMotion, frames_of};
-use crate::aistpp::GDanceMotion;
 
 /// A group of dancers with equal frame counts and frame rates.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,22 +18,6 @@ impl GroupMotion {
     /// Common frame count (0 for an empty group).
     pub fn frames(&self) -> usize {
         self.dancers.first().map_or(0, SmplMotion::frames)
-    }
-
-    /// Splits an AIOZ-GDance sequence into dancers.
-    pub fn from_gdance(g: &GDanceMotion) -> Result<Self, ReprError> {
-        let dancers = (0..g.persons)
-            .map(|p| {
-                let poses = g
-                    .person_poses(p)
-                    .ok_or_else(|| ReprError::Invalid(format!("dancer {p} missing")))?;
-                let trans = g
-                    .person_trans(p)
-                    .ok_or_else(|| ReprError::Invalid(format!("dancer {p} missing")))?;
-                SmplMotion::new(g.fps as f32, poses.to_vec(), trans.to_vec())
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(GroupMotion { dancers })
     }
 }
 

@@ -76,11 +76,7 @@ pub enum ReprError {
 }
 
 /// Checks `data.len()` is a multiple of `width` and returns the frame count.
-pub(crate) fn frames_of(
-    what: &'static str,
-    data: &[f32],
-    width: usize,
-) -> Result<usize, ReprError> {
+pub fn frames_of(what: &'static str, data: &[f32], width: usize) -> Result<usize, ReprError> {
     if !data.len().is_multiple_of(width) {
         return Err(ReprError::Shape {
             what,

@@ -13,7 +13,6 @@
 //! (C.3), LODGE's frame-0 toe grounding (A.6 / C.3).
 
 use super::{ReprError, frames_of};
-use crate::aistpp::AistppMotion;
 use crate::fk::fk_axis_angle_f32;
 use crate::rotation::Quat;
 use crate::skeleton::{SMPL24_MIRROR, Skeleton};
@@ -200,29 +199,6 @@ impl SmplMotion {
             )));
         }
         Ok(t)
-    }
-
-    /// AIST++ motion with the pelvis at its true world position:
-    /// `trans = smpl_trans / smpl_scaling + AISTPP_PELVIS_REST` (60 fps).
-    pub fn from_aistpp(m: &AistppMotion) -> Self {
-        let mut out = Self::from_aistpp_edge(m);
-        for t in out.trans.chunks_exact_mut(3) {
-            for (v, o) in t.iter_mut().zip(AISTPP_PELVIS_REST) {
-                *v += o;
-            }
-        }
-        out
-    }
-
-    /// AIST++ motion the way EDGE reads it (`data/slice.py`, anchors.md C.1): root translation
-    /// `smpl_trans / smpl_scaling`, i.e. **without** the rest-pelvis offset, so the skeleton sits
-    /// ~24 cm lower than the real dancer. Use this to reproduce EDGE's 151-dim vectors bit for bit.
-    pub fn from_aistpp_edge(m: &AistppMotion) -> Self {
-        SmplMotion {
-            fps: m.fps as f32,
-            poses: m.poses.clone(),
-            trans: m.trans_metres(),
-        }
     }
 
     /// Number of frames (`trans.len() / 3`).

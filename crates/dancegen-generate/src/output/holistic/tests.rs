@@ -4,13 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use dancegen_motion::bvh::{BvhReadOptions, read_bvh};
-use dancegen_motion::bvh_motion::bvh_world_positions;
-use dancegen_motion::face::{ARKIT_COUNT, ARKIT_NAMES, FaceWeights, livelink_csv};
+use dancegen_formats::bvh::{BvhReadOptions, read_bvh};
+use dancegen_formats::bvh_motion::bvh_world_positions;
+use dancegen_formats::livelink_csv;
+use dancegen_formats::rig::Rig;
+use dancegen_formats::smpl_npz::{SmplNpzOptions, read_smpl_npz};
+use dancegen_motion::face::{ARKIT_COUNT, ARKIT_NAMES, FaceWeights};
 use dancegen_motion::repr::motion::SmplMotion;
-use dancegen_motion::rig::Rig;
 use dancegen_motion::skeleton::{SMPLH52_NAMES, Skeleton};
-use dancegen_motion::smpl_npz::{SmplNpzOptions, read_smpl_npz};
 use dancegen_music::FrameMatrix;
 use dancegen_music::decode::AudioSource;
 use dancegen_music::features::{MusicFeatures, StartBpm};

@@ -1,0 +1,377 @@
+//! Planted feet hold their place: two-bone leg IK on the frames where a foot is in contact.
+//!
+//! [`crate::foot_lock`] moves the root so the *support* foot stops gliding; the other foot can
+//! still slide while it is planted, and a foot that is planted heel-first or toe-first can
+//! drift as its ankle turns. This pass pins each planted joint (ankle and toe, separately) to
+//! the mean position of its contact run and bends the hip and knee to reach it, keeping the
+//! knee in the plane the generated leg bent in. With both ankle and toe planted the foot also
+//! keeps the orientation that puts the toe on its spot. Raised-cosine ramps over
+//! `blend_frames` frames before and after each run fade the correction in and out, so a step
+//! lifts off and lands without a jump. The pelvis, spine and arms are never touched.
+//!
+//! Not part of any of the four published methods: the systems use it as a named
+//! post-processing step (switched off together with the foot lock, `--no-foot-lock`).
+
+use dancegen_motion::fk::{self, LocalRotations};
+use dancegen_motion::rotation::{Mat3, Quat};
+use dancegen_motion::skeleton::Skeleton;
+use dancegen_motion::vec3::{add, dot, lerp, norm, scale, sub};
+
+/// The joints of one leg (indices into the skeleton).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Leg {
+    pub hip: usize,
+    pub knee: usize,
+    pub ankle: usize,
+    pub toe: usize,
+}
+
+/// SMPL 24's legs: left (1, 4, 7, 10) and right (2, 5, 8, 11).
+pub const SMPL_LEGS: [Leg; 2] = [
+    Leg {
+        hip: 1,
+        knee: 4,
+        ankle: 7,
+        toe: 10,
+    },
+    Leg {
+        hip: 2,
+        knee: 5,
+        ankle: 8,
+        toe: 11,
+    },
+];
+
+/// Where one leg's contacts are, per frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegContacts {
+    /// `[T]`: the ankle (heel) is planted.
+    pub ankle: Vec<bool>,
+    /// `[T]`: the toe is planted.
+    pub toe: Vec<bool>,
+}
+
+/// What the pass changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootIkReport {
+    /// Frames × legs that were adjusted.
+    pub adjusted: usize,
+    /// Largest distance (metres) a target lay beyond the leg's reach.
+    pub max_unreached_m: f64,
+}
+
+/// Pins planted feet (see the module documentation). `local` holds `[T, J]` local rotation
+/// matrices (row-major frames), `root` the `[T]` root positions, both in the skeleton's units
+/// and axes; `contacts` has one entry per leg in `legs`.
+pub fn pin_planted_feet(
+    skeleton: &Skeleton,
+    local: &mut [Mat3],
+    root: &[[f64; 3]],
+    legs: &[Leg],
+    contacts: &[LegContacts],
+    blend_frames: usize,
+) -> FootIkReport {
+    let j = skeleton.len();
+    let t = root.len();
+    assert_eq!(local.len(), t * j, "one rotation per joint and frame");
+    assert_eq!(legs.len(), contacts.len(), "one contact track per leg");
+    let mut report = FootIkReport::default();
+    for (leg, c) in legs.iter().zip(contacts) {
+        assert!(
+            c.ankle.len() == t && c.toe.len() == t,
+            "one contact per frame"
+        );
+        let world = Pose::all(skeleton, local, root);
+        let ankle_pins = Pins::new(&c.ankle, blend_frames, |f| world[f].pos[leg.ankle]);
+        let toe_pins = Pins::new(&c.toe, blend_frames, |f| world[f].pos[leg.toe]);
+        let toe_offset = skeleton.offsets()[leg.toe];
+        for (f, pose) in world.iter().enumerate() {
+            let (wa, pa) = ankle_pins.at(f);
+            let (wt, pt) = toe_pins.at(f);
+            if wa == 0.0 && wt == 0.0 {
+                continue;
+            }
+            let ankle = pose.pos[leg.ankle];
+            let r_ankle = pose.rot[leg.ankle];
+            let toe_vec = r_ankle.mul_vec(toe_offset);
+            let want_ankle = lerp(ankle, pa, wa);
+            let want_toe = lerp(pose.pos[leg.toe], pt, wt);
+            // Where the ankle must be for the toe to land on its spot with the foot as posed,
+            // blended with the ankle's own pin.
+            let target = lerp(sub(want_toe, toe_vec), want_ankle, wa);
+            // Turn the foot (by the toe's weight) so that it points at the toe's spot.
+            let turn = slerp_from_identity(Mat3::between(toe_vec, sub(want_toe, target)), wt);
+            let r_ankle_new = turn * r_ankle;
+            let frame = &mut local[f * j..(f + 1) * j];
+            let unreached = reach(skeleton, frame, pose, *leg, target, r_ankle_new);
+            report.max_unreached_m = report.max_unreached_m.max(unreached);
+            report.adjusted += 1;
+        }
+    }
+    report
+}
+
+/// World rotations and positions of one frame.
+struct Pose {
+    rot: Vec<Mat3>,
+    pos: Vec<[f64; 3]>,
+}
+
+impl Pose {
+    /// Every frame's pose, through the crate's FK.
+    fn all(skeleton: &Skeleton, local: &[Mat3], root: &[[f64; 3]]) -> Vec<Pose> {
+        let flat: Vec<f64> = local.iter().flat_map(|m| m.0.concat()).collect();
+        let root_flat: Vec<f64> = root.concat();
+        let out = fk::forward_kinematics(skeleton, LocalRotations::Matrix(&flat), &root_flat, true)
+            .expect("one rotation per joint and frame, one root per frame");
+        let world = out.world_rotations.expect("requested");
+        let j = skeleton.len();
+        (0..root.len())
+            .map(|f| Pose {
+                rot: (0..j)
+                    .map(|k| {
+                        let m = &world[(f * j + k) * 9..(f * j + k + 1) * 9];
+                        Mat3([[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]])
+                    })
+                    .collect(),
+                pos: (0..j)
+                    .map(|k| std::array::from_fn(|a| out.positions[(f * j + k) * 3 + a]))
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// Per-frame pin weight and position of one joint from its contact runs.
+struct Pins {
+    weight: Vec<f64>,
+    target: Vec<[f64; 3]>,
+}
+
+impl Pins {
+    fn new(planted: &[bool], blend: usize, pos: impl Fn(usize) -> [f64; 3]) -> Pins {
+        let t = planted.len();
+        let mut weight = vec![0.0; t];
+        let mut target = vec![[0.0; 3]; t];
+        let mut f = 0;
+        while f < t {
+            if !planted[f] {
+                f += 1;
+                continue;
+            }
+            let start = f;
+            while f < t && planted[f] {
+                f += 1;
+            }
+            let end = f;
+            let mut mean = [0.0; 3];
+            for g in start..end {
+                mean = add(mean, pos(g));
+            }
+            let mean = scale(mean, 1.0 / (end - start) as f64);
+            let lo = start.saturating_sub(blend);
+            let hi = (end + blend).min(t);
+            for g in lo..hi {
+                let dist = if g < start {
+                    start - g
+                } else {
+                    (g + 1).saturating_sub(end)
+                };
+                // Raised cosine: 1 in the run, falling to 0 at `blend + 1` frames away.
+                let w =
+                    0.5 * (1.0 + (std::f64::consts::PI * dist as f64 / (blend + 1) as f64).cos());
+                if w > weight[g] {
+                    weight[g] = w;
+                    target[g] = mean;
+                }
+            }
+        }
+        Pins { weight, target }
+    }
+
+    fn at(&self, f: usize) -> (f64, [f64; 3]) {
+        (self.weight[f], self.target[f])
+    }
+}
+
+/// Two-bone IK: new local rotations of `leg`'s hip, knee and ankle in `local` (one frame) so
+/// that the ankle reaches `target` with world rotation `r_ankle`; the knee stays in the plane
+/// of hip, generated knee and target. Returns how far the target was out of reach (0 if not).
+fn reach(
+    skeleton: &Skeleton,
+    local: &mut [Mat3],
+    pose: &Pose,
+    leg: Leg,
+    target: [f64; 3],
+    r_ankle: Mat3,
+) -> f64 {
+    let hip = pose.pos[leg.hip];
+    let knee = pose.pos[leg.knee];
+    let ankle = pose.pos[leg.ankle];
+    let a = norm(sub(knee, hip));
+    let b = norm(sub(ankle, knee));
+    let to_target = sub(target, hip);
+    let d_raw = norm(to_target);
+    // Keep a sliver of bend so the knee's plane stays defined.
+    let (lo, hi) = ((a - b).abs() + 1e-6, (a + b) * (1.0 - 1e-6));
+    let d = d_raw.clamp(lo, hi);
+    let unreached = (d_raw - hi).max(0.0);
+    if d_raw < 1e-9 || a < 1e-9 || b < 1e-9 {
+        return unreached;
+    }
+    let u = scale(to_target, 1.0 / d_raw);
+    // The bend direction: the generated knee's offset from the hip-target line.
+    let thigh = sub(knee, hip);
+    let mut pole = sub(thigh, scale(u, dot(thigh, u)));
+    if norm(pole) < 1e-9 {
+        // A straight leg pointing at the target: bend the way the knee's own forward points.
+        let fwd = pose.rot[leg.knee].mul_vec([0.0, 0.0, 1.0]);
+        pole = sub(fwd, scale(u, dot(fwd, u)));
+    }
+    let pole = scale(pole, 1.0 / norm(pole).max(1e-12));
+    let x = (a * a - b * b + d * d) / (2.0 * d);
+    let h = (a * a - x * x).max(0.0).sqrt();
+    let new_knee = add(hip, add(scale(u, x), scale(pole, h)));
+    let new_ankle = add(hip, scale(u, d));
+
+    let turn_hip = Mat3::between(thigh, sub(new_knee, hip));
+    let r_hip = turn_hip * pose.rot[leg.hip];
+    let r_knee_turned = turn_hip * pose.rot[leg.knee];
+    let shin = r_knee_turned.mul_vec(skeleton.offsets()[leg.ankle]);
+    let r_knee = Mat3::between(shin, sub(new_ankle, new_knee)) * r_knee_turned;
+    let parent_of_hip = skeleton
+        .parent(leg.hip)
+        .map_or(Mat3::IDENTITY, |p| pose.rot[p]);
+    local[leg.hip] = parent_of_hip.transpose() * r_hip;
+    local[leg.knee] = r_hip.transpose() * r_knee;
+    local[leg.ankle] = r_knee.transpose() * r_ankle;
+    unreached
+}
+
+fn slerp_from_identity(r: Mat3, w: f64) -> Mat3 {
+    if w >= 1.0 {
+        return r;
+    }
+    Mat3::from_quat(Quat::slerp(Quat::IDENTITY, r.to_quat(), w))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A walk-like clip: the root glides forward along x while the left leg stays posed the
+    /// same (so its foot slides with the root); the left foot is marked planted throughout.
+    fn gliding(frames: usize) -> (Skeleton, Vec<Mat3>, Vec<[f64; 3]>) {
+        let skel = Skeleton::smpl24();
+        let bend = Mat3::from_axis_angle([0.3, 0.0, 0.0]);
+        let mut local = vec![Mat3::IDENTITY; frames * 24];
+        for f in 0..frames {
+            local[f * 24 + 4] = bend;
+            local[f * 24 + 1] = Mat3::from_axis_angle([-0.15, 0.0, 0.0]);
+        }
+        let root = (0..frames).map(|f| [0.01 * f as f64, 0.9, 0.0]).collect();
+        (skel, local, root)
+    }
+
+    fn positions(skel: &Skeleton, local: &[Mat3], root: &[[f64; 3]]) -> Vec<Pose> {
+        Pose::all(skel, local, root)
+    }
+
+    #[test]
+    fn a_planted_foot_holds_its_place_while_the_body_moves() {
+        let t = 20;
+        let (skel, mut local, root) = gliding(t);
+        let before = positions(&skel, &local, &root);
+        let contacts = vec![
+            LegContacts {
+                ankle: vec![true; t],
+                toe: vec![true; t],
+            },
+            LegContacts {
+                ankle: vec![false; t],
+                toe: vec![false; t],
+            },
+        ];
+        let report = pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 4);
+        assert_eq!(report.adjusted, t);
+        assert_eq!(report.max_unreached_m, 0.0);
+        let after = positions(&skel, &local, &root);
+        let (a0, t0) = (after[0].pos[7], after[0].pos[10]);
+        // 1e-6: the IK leaves a 1e-6 relative sliver of reach (see `reach`).
+        for p in &after {
+            assert!(norm(sub(p.pos[7], a0)) < 1e-6, "ankle moved");
+            assert!(norm(sub(p.pos[10], t0)) < 1e-6, "toe moved");
+        }
+        // The pin is the run's mean: the middle of the glide.
+        let mid = lerp(before[0].pos[7], before[t - 1].pos[7], 0.5);
+        assert!(norm(sub(a0, mid)) < 1e-6);
+        // Bones keep their lengths; the right leg and the pelvis are untouched.
+        for (p, q) in after.iter().zip(&before) {
+            assert!((norm(sub(p.pos[4], p.pos[1])) - norm(sub(q.pos[4], q.pos[1]))).abs() < 1e-9);
+            assert!((norm(sub(p.pos[7], p.pos[4])) - norm(sub(q.pos[7], q.pos[4]))).abs() < 1e-9);
+            assert!(norm(sub(p.pos[8], q.pos[8])) < 1e-12);
+            assert!(norm(sub(p.pos[0], q.pos[0])) < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_correction_fades_in_and_out_around_a_contact() {
+        let t = 30;
+        let (skel, mut local, root) = gliding(t);
+        let before = positions(&skel, &local, &root);
+        let planted: Vec<bool> = (0..t).map(|f| (10..20).contains(&f)).collect();
+        let contacts = vec![
+            LegContacts {
+                ankle: planted.clone(),
+                toe: planted,
+            },
+            LegContacts {
+                ankle: vec![false; t],
+                toe: vec![false; t],
+            },
+        ];
+        pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 4);
+        let after = positions(&skel, &local, &root);
+        let moved: Vec<f64> = (0..t)
+            .map(|f| norm(sub(after[f].pos[7], before[f].pos[7])))
+            .collect();
+        // Untouched five or more frames away from the run.
+        assert!(moved[..5].iter().chain(&moved[25..]).all(|&m| m < 1e-12));
+        // Still inside the run; each step out of it moves the foot a little, never a jump.
+        for f in 11..20 {
+            assert!(norm(sub(after[f].pos[7], after[10].pos[7])) < 1e-6);
+        }
+        for f in 1..t {
+            let step = norm(sub(after[f].pos[7], after[f - 1].pos[7]));
+            // The free foot moves 1 cm per frame with the glide; over the 4-frame ramp it also
+            // covers the gap to the pin (~4.5 cm at the run's start): 3 cm per frame at most.
+            assert!(step < 0.03, "frame {f}: the ankle jumps {step} m");
+        }
+    }
+
+    #[test]
+    fn a_target_out_of_reach_is_reported_and_the_leg_stretches_towards_it() {
+        let t = 40;
+        let skel = Skeleton::smpl24();
+        let mut local = vec![Mat3::IDENTITY; t * 24];
+        // The body flies up and away while the left foot claims contact.
+        let root: Vec<[f64; 3]> = (0..t).map(|f| [0.05 * f as f64, 0.9, 0.0]).collect();
+        let contacts = vec![
+            LegContacts {
+                ankle: vec![true; t],
+                toe: vec![false; t],
+            },
+            LegContacts {
+                ankle: vec![false; t],
+                toe: vec![false; t],
+            },
+        ];
+        let report = pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 2);
+        assert!(report.max_unreached_m > 0.1);
+        assert!(
+            local
+                .iter()
+                .all(|m| m.0.iter().flatten().all(|v| v.is_finite()))
+        );
+    }
+}
