@@ -516,7 +516,7 @@ def cmd_report(args):
       "without progressive masking; **single_cfg** replaces the layer-wise guidance (LDCFG, "
       "one scale per HFSQ level) by one scale s = 1 for every level; **no_separation** keeps "
       "the follower where the model put it. The separation (ours, not in the paper: "
-      "`dancegen_motion::couple_separation`) moves the follower horizontally, by a smooth "
+      "`dancegen_refine::couple_separation`) moves the follower horizontally, by a smooth "
       "offset, out of the leader's capsule body wherever trunks, heads, arms or legs overlap; "
       "hands may touch. Its capsule body is the canonical one of the self-penetration "
       "measures, not IPR's coarser bone capsules. Its margin, smoothing and rounds were set "

@@ -52,7 +52,7 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk, formatting, physi
 
 FPS = 30
 KEYFRAME_EVERY = 30  # frames between formation keyframes taken from a sample's trajectories
-MIN_SEPARATION_M = 0.45  # dancegen_motion::formation::MIN_SEPARATION_M
+MIN_SEPARATION_M = 0.45  # dancegen_refine::formation::MIN_SEPARATION_M
 JOIN_BAND = 5  # frames either side of a join searched for a root jump (group.md §4)
 LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placing B1
 HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
