@@ -20,37 +20,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use dancegen_generate::{CancelToken, Generator, ModelLocator};
 
-use crate::cli::BatchArgs;
+use crate::cli::{BatchArgs, Shard};
 use manifest::{BadLine, Entry};
 use record::{Done, Outcome};
-
-/// `I/N`: this process's share of the manifest.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shard {
-    pub index: usize,
-    pub count: usize,
-}
-
-impl std::str::FromStr for Shard {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let (i, n) = s
-            .split_once('/')
-            .ok_or_else(|| format!("'{s}' is not I/N (e.g. 0/4)"))?;
-        let index: usize = i
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{i}' is not a shard index"))?;
-        let count: usize = n
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{n}' is not a shard count"))?;
-        if count == 0 || index >= count {
-            return Err(format!("shard {index}/{count}: need 0 ≤ I < N"));
-        }
-        Ok(Shard { index, count })
-    }
-}
 
 /// Tallies for the closing summary.
 #[derive(Default)]

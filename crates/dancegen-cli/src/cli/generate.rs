@@ -1,0 +1,160 @@
+//! `dancegen generate`: the song, the system and model, and every sampling switch.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use dancegen_formats::rig::Rig;
+
+use super::value_parsers::{parse_rig, parse_source_fps};
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerArg {
+    /// Lodge++: choreography network → primitives → all windows in parallel.
+    Lodgepp,
+    /// EDGE's long-form sampling (half-overlapping windows, no primitives), for comparison.
+    Edge,
+    /// Window after window, continuing the previous window (solo: no choreography network;
+    /// duet: the ablation of Blocked Local Context).
+    Autoregressive,
+    /// Duet: Blocked Local Context, every block of the follower at once (ReactDance).
+    Blc,
+    /// Group: long group diffusion sampling, window after window (TCDiff++ LGDS, window 0
+    /// kept).
+    Lgds,
+    /// Group: every window at once with EDGE's first-half overwrite and stitching.
+    Parallel,
+}
+
+/// How `generate` reports progress on stderr.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ProgressArg {
+    /// A progress bar when stderr is a terminal (nothing with -q).
+    #[default]
+    Bar,
+    /// One JSON object per line: {"stage": ..., "fraction": 0..1, "eta_s": ...}; the last
+    /// one has fraction 1.
+    Json,
+    /// Nothing.
+    None,
+}
+
+#[derive(Args, Debug)]
+pub struct GenerateArgs {
+    /// Song (WAV, FLAC, OGG, MP3, ...); default: the bundled demo song.
+    pub song: Option<PathBuf>,
+    /// The dance system (default: solo, or duet with --leader).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(
+        dancegen_generate::systems::SYSTEMS.map(|s| s.name)))]
+    pub system: Option<String>,
+    /// Progress on stderr.
+    #[arg(long, value_enum, default_value_t = ProgressArg::Bar)]
+    pub progress: ProgressArg,
+    /// Output file, by extension: .glb .fbx .bvh .npz (SMPL) .npy (joints (T, 24, 3), metres,
+    /// Y-up, 30 fps) .json .gif .mp4 (preview with the song) .csv (the face as Live Link Face
+    /// ARKit weights; --system holistic only, whose .glb .fbx .bvh .npz .npy .json also hold
+    /// the fingers: 52 SMPL-H joints). Repeatable. Default: dance.glb.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Vec<PathBuf>,
+    /// Bone names of .bvh, .fbx and .glb: smpl, mixamo (mixamorig:Hips, ...), ue5 (pelvis,
+    /// thigh_l, ...) or vrm (hips, leftUpperLeg, ...). The joints stand in the same places in
+    /// every rig; .npy, .npz and .json keep SMPL's names and order.
+    #[arg(long, default_value = "smpl", value_parser = parse_rig)]
+    pub rig: Rig,
+    /// Your own humanoid character (.glb, .vrm or .gltf with a skinned mesh): the .glb outputs
+    /// become it dancing, retargeted onto its bones (matched by name — Mixamo, UE, VRM, SMPL,
+    /// Blender-style — and hierarchy), its rest pose and its height. One dancer (with a leader,
+    /// add --follower-only).
+    #[arg(long, value_name = "CHARACTER.glb")]
+    pub character: Option<PathBuf>,
+    /// Model directory (default: lodgepp-small, or reactdance-small with --leader, found on
+    /// the model search path: `dancegen models` shows it).
+    #[arg(long, value_name = "DIR")]
+    pub model: Option<PathBuf>,
+    /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
+    /// It needs joint rotations: a solo dance for it is a `generate -o leader.npz` (or .bvh),
+    /// not the joint positions of `.npy`.
+    /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
+    /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
+    /// which hold the follower.
+    #[arg(long, value_name = "FILE")]
+    pub leader: Option<PathBuf>,
+    /// Duet: the rate the leader was captured at, whatever its file's header says (the frames
+    /// stay the same, their times change), e.g. 60 for the CMU salsa BVHs whose headers say
+    /// 120. Needed for a file whose header has no rate.
+    #[arg(long, value_name = "FPS", requires = "leader", value_parser = parse_source_fps)]
+    pub leader_fps: Option<f64>,
+    /// Duet: write the follower alone to every output.
+    #[arg(long, requires = "leader")]
+    pub follower_only: bool,
+    /// Duet and group: keep the dancers exactly where the model put them, even where one
+    /// body passes through another (by default a smooth horizontal shift moves them apart;
+    /// hands may touch).
+    #[arg(long)]
+    pub no_separation: bool,
+    /// Group: number of dancers (2-5). `.npy` then holds `(N, T, 24, 3)`, `.bvh` and `.npz`
+    /// are written once per dancer (`name_0.bvh`, ...), `.json` adds every root trajectory and
+    /// the left-to-right order at the start and at the end.
+    #[arg(long, value_name = "N")]
+    pub dancers: Option<usize>,
+    /// Group: where each dancer should be and when: {"keyframes": [{"t": seconds, "positions":
+    /// [[x, z] or null, ... one per dancer]}, ...]}, metres, x to the audience's right, +z
+    /// towards the audience; minimum-jerk paths between keyframes. Default: the model chooses.
+    #[arg(long, value_name = "FORMATION.json")]
+    pub formation: Option<PathBuf>,
+    /// Group: every dancer dances the same moves (the leftmost dancer's), each on its own path.
+    #[arg(long)]
+    pub unison: bool,
+    /// Holistic: a (52, 103) ARKit -> FLAME matrix (.npy, yours: FLAME and SoulNet's mapping
+    /// are not redistributable); the .json then also holds the face as FLAME's 100 expression
+    /// and 3 jaw values per frame ("flame").
+    #[arg(long, value_name = "MAPPING.npy")]
+    pub flame_mapping: Option<PathBuf>,
+    /// Duet: guidance s of the coarse (base) HFSQ level, x̂0 = (1 + s)·cond − s·uncond
+    /// (default: the model's).
+    #[arg(long, requires = "leader")]
+    pub guidance_coarse: Option<f64>,
+    /// Duet: guidance s of the fine (residual) levels (default: the model's).
+    #[arg(long, requires = "leader")]
+    pub guidance_fine: Option<f64>,
+    /// Duet: guidance s per level, coarse first (the last value repeats), e.g. 1.5,0.5,0.5.
+    #[arg(long, requires = "leader", value_delimiter = ',', num_args = 1..,
+        conflicts_with_all = ["guidance_coarse", "guidance_fine"])]
+    pub guidance_levels: Vec<f64>,
+    /// Dance genre (the model's list; default: the model's default genre).
+    #[arg(long)]
+    pub genre: Option<String>,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Denoising steps (default: the model's, 50).
+    #[arg(long)]
+    pub steps: Option<usize>,
+    /// Classifier-free guidance weight w (default: the model's, 2). Duet: one weight for every
+    /// level (single-scale CFG, s = w − 1) instead of the layer-wise guidance.
+    #[arg(long)]
+    pub guidance: Option<f64>,
+    /// Start of the music to dance to (seconds).
+    #[arg(long)]
+    pub start: Option<f64>,
+    /// End of the music to dance to (seconds; default: the song's end).
+    #[arg(long)]
+    pub end: Option<f64>,
+    /// Long-form sampler (default: lodgepp solo, blc duet).
+    #[arg(long, value_enum)]
+    pub sampler: Option<SamplerArg>,
+    /// Switch off the Foot Refine Block (ablation).
+    #[arg(long)]
+    pub no_foot_refine: bool,
+    /// Switch off the penetration guidance (ablation).
+    #[arg(long)]
+    pub no_penetration_guidance: bool,
+    /// Leave the feet as generated: no root-path correction for the support foot and no leg IK
+    /// pinning planted feet (post-processing steps, not part of Lodge++, ReactDance, TCDiff++
+    /// or SoulNet; a duet follower gets the root correction only, on a leash to its leader).
+    #[arg(long)]
+    pub no_foot_lock: bool,
+    /// Leave the timing as generated: no time warp moving the dance's beats onto the song's
+    /// (solo) or the follower's onto the leader's (duet); post-processing, not part of Lodge++
+    /// or ReactDance; the playback speed stays within ±15 %.
+    #[arg(long)]
+    pub no_beat_align: bool,
+}

@@ -1,0 +1,33 @@
+//! `dancegen serve`: the web app's address, data folder, workers, limits and models.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+#[derive(Args, Debug)]
+pub struct ServeArgs {
+    /// Address to listen on. Loopback by default: to offer it to others, put a reverse proxy
+    /// with TLS and authentication in front (see the README), or give 0.0.0.0:PORT knowingly.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    pub addr: std::net::SocketAddr,
+    /// Folder for the job database and the jobs' files (default: the platform's data folder,
+    /// e.g. ~/.local/share/dancegen/serve).
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Jobs generated at once (each already uses every core).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub workers: u16,
+    /// Longest song accepted, seconds.
+    #[arg(long, default_value_t = 600.0, value_name = "SECONDS")]
+    pub max_song_seconds: f64,
+    /// Largest upload, MB.
+    #[arg(long, default_value_t = 64, value_name = "MB")]
+    pub max_upload_mb: usize,
+    /// Jobs waiting or running before new ones are refused (HTTP 429).
+    #[arg(long, default_value_t = 100, value_name = "N")]
+    pub max_queue: usize,
+    /// A model folder to serve instead of the installed default (`--model DIR`, repeatable;
+    /// its system comes from its model.toml).
+    #[arg(long = "model", value_name = "DIR")]
+    pub models: Vec<PathBuf>,
+}
