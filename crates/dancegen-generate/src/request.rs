@@ -6,35 +6,14 @@ use std::sync::Arc;
 pub use dancegen_character::Character;
 pub use dancegen_formats::rig::Rig;
 
+// Defined where the systems read them; a front end finds them here, with the rest of a request.
+pub use crate::song::Song;
+pub use crate::system::CommonOptions;
+
 use crate::systems::duet::DuetOptions;
 use crate::systems::group::GroupOptions;
 use crate::systems::holistic::HolisticOptions;
 use crate::systems::solo::SoloOptions;
-
-/// Where the song comes from.
-#[derive(Clone, Debug)]
-pub enum Song {
-    /// The bundled demo song (45 s of *Metal Madness*, compiled into the library).
-    Demo,
-    File(PathBuf),
-    /// Bytes in memory (an upload); `name` is shown in messages and its extension is the
-    /// format hint.
-    Bytes {
-        name: String,
-        bytes: Arc<[u8]>,
-    },
-}
-
-impl Song {
-    /// The file, or the demo song when there is none (what every command does without a
-    /// song argument).
-    pub fn file_or_demo(path: Option<&std::path::Path>) -> Self {
-        match path {
-            Some(p) => Song::File(p.to_path_buf()),
-            None => Song::Demo,
-        }
-    }
-}
 
 /// The system that dances, with its own options. Adding a system adds a variant here and
 /// its module in [`crate::systems`]; the existing systems are not touched.
@@ -61,42 +40,6 @@ impl SystemRequest {
     }
 }
 
-/// Options every system understands; `None` means the model's default.
-#[derive(Clone, Debug, Default)]
-pub struct CommonOptions {
-    pub seed: u64,
-    /// Denoising steps.
-    pub steps: Option<usize>,
-    /// Classifier-free guidance weight `w` (1 = conditional only).
-    pub guidance: Option<f64>,
-    /// Dance genre (the model's list).
-    pub genre: Option<String>,
-    /// Start of the music to dance to (seconds).
-    pub start: Option<f64>,
-    /// End of the music to dance to (seconds).
-    pub end: Option<f64>,
-}
-
-impl CommonOptions {
-    /// `--guidance` non-negative and finite, `--steps` at least 1; `default` completes the
-    /// guidance hint (e.g. "2 = Lodge's default").
-    pub fn check_sampling(&self, default: &str) -> Result<(), crate::GenerateError> {
-        if let Some(w) = self.guidance
-            && !(w.is_finite() && w >= 0.0)
-        {
-            return Err(crate::GenerateError::Invalid(format!(
-                "--guidance {w}: use a non-negative number (1 = no guidance, {default})"
-            )));
-        }
-        if self.steps == Some(0) {
-            return Err(crate::GenerateError::Invalid(
-                "--steps must be at least 1".into(),
-            ));
-        }
-        Ok(())
-    }
-}
-
 /// Which dancers an output file holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DancerSelection {
@@ -111,7 +54,7 @@ pub enum DancerSelection {
     Given,
 }
 
-/// One file to write; the format comes from the extension ([`crate::output::OutputFormat`]).
+/// One file to write; the format comes from the extension (`output::OutputFormat`).
 #[derive(Clone, Debug)]
 pub struct OutputRequest {
     pub path: PathBuf,

@@ -8,7 +8,31 @@ use dancegen_music::decode::AudioSource;
 use dancegen_music::features::{ExtractOptions, FeatureSet, MusicFeatures, extract};
 
 use crate::error::GenerateError;
-use crate::request::Song;
+
+/// Where the song comes from.
+#[derive(Clone, Debug)]
+pub enum Song {
+    /// The bundled demo song (45 s of *Metal Madness*, compiled into the library).
+    Demo,
+    File(PathBuf),
+    /// Bytes in memory (an upload); `name` is shown in messages and its extension is the
+    /// format hint.
+    Bytes {
+        name: String,
+        bytes: Arc<[u8]>,
+    },
+}
+
+impl Song {
+    /// The file, or the demo song when there is none (what every command does without a
+    /// song argument).
+    pub fn file_or_demo(path: Option<&std::path::Path>) -> Self {
+        match path {
+            Some(p) => Song::File(p.to_path_buf()),
+            None => Song::Demo,
+        }
+    }
+}
 
 /// Motion and feature frame rate of every shipped system (EDGE / Lodge++ / ReactDance).
 pub const FPS: u32 = 30;

@@ -7,8 +7,43 @@ use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::StepHook;
 
 use crate::error::GenerateError;
-use crate::request::CommonOptions;
 use crate::song::{AnalysedSong, Span};
+
+/// Options every system understands; `None` means the model's default.
+#[derive(Clone, Debug, Default)]
+pub struct CommonOptions {
+    pub seed: u64,
+    /// Denoising steps.
+    pub steps: Option<usize>,
+    /// Classifier-free guidance weight `w` (1 = conditional only).
+    pub guidance: Option<f64>,
+    /// Dance genre (the model's list).
+    pub genre: Option<String>,
+    /// Start of the music to dance to (seconds).
+    pub start: Option<f64>,
+    /// End of the music to dance to (seconds).
+    pub end: Option<f64>,
+}
+
+impl CommonOptions {
+    /// `--guidance` non-negative and finite, `--steps` at least 1; `default` completes the
+    /// guidance hint (e.g. "2 = Lodge's default").
+    pub fn check_sampling(&self, default: &str) -> Result<(), crate::GenerateError> {
+        if let Some(w) = self.guidance
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(crate::GenerateError::Invalid(format!(
+                "--guidance {w}: use a non-negative number (1 = no guidance, {default})"
+            )));
+        }
+        if self.steps == Some(0) {
+            return Err(crate::GenerateError::Invalid(
+                "--steps must be at least 1".into(),
+            ));
+        }
+        Ok(())
+    }
+}
 
 /// What a dancer is in the dance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -21,8 +21,8 @@ use dancegen_refine::couple_separation::SeparationConfig;
 
 use crate::beat_align::align_follower_to_leader;
 use crate::error::GenerateError;
-use crate::request::CommonOptions;
 use crate::song::{FPS, Span};
+use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, Role};
 
 /// Shortest leader the model accepts: one latent token.

@@ -25,8 +25,8 @@ use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, N_MIN};
 use dancegen_tcdiffpp::sampler::{GroupRequest, GroupSampleOptions, RootXy, generate};
 
 use crate::error::GenerateError;
-use crate::request::CommonOptions;
 use crate::song::FPS;
+use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, GroupReport, Role};
 use crate::systems::solo::keep_feet_above_floor;
 

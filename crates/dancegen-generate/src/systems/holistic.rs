@@ -15,8 +15,8 @@ use dancegen_soulnet::bundle::HolisticModel;
 use dancegen_soulnet::pipeline::{self, GenerateOptions, TOKENS};
 
 use crate::error::GenerateError;
-use crate::request::CommonOptions;
 use crate::song::FPS;
+use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, HolisticParts, Role};
 use crate::systems::solo::keep_feet_above_floor;
 

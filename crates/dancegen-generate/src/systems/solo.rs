@@ -15,8 +15,8 @@ use dancegen_nn::progress::DENOISING;
 
 use crate::beat_align::align_to_beats;
 use crate::error::GenerateError;
-use crate::request::CommonOptions;
 use crate::song::FPS;
+use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, Role};
 
 /// Shortest music the model dances to (one PDDM window needs material).
