@@ -6,7 +6,6 @@
 //! sizes are in `configs/lodgepp_*_paper.toml` (anchors D.2/D.3: VQ-VAE width 1024, codebook
 //! 1024 × 1024; GPT embed 512; denoiser 8 layers × 512).
 
-use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::diffusion::pddm::{ResidualShift, ResidualShiftConfig};
 use serde::{Deserialize, Serialize};
 
@@ -137,7 +136,7 @@ pub struct PddmLossWeights {
     /// Weight of the main decoder's own x̂0 loss next to the refined one (deep supervision: it
     /// keeps the main output usable when the refine block is switched off for the ablation).
     pub main_output: f64,
-    /// Weight of the root's up-axis term ([`crate::training::root_up_loss`]; not in the paper,
+    /// Weight of the root's up-axis term (`training::root_up_loss`; not in the paper,
     /// issue 16). 0 (the default, and every shipped model) leaves it out.
     pub root_up: f64,
 }
@@ -236,22 +235,4 @@ pub struct PddmTable {
 
 fn yes() -> bool {
     true
-}
-
-impl PddmTable {
-    /// The model with identity statistics (a checkpoint or bundle supplies the real ones).
-    pub fn init(
-        &self,
-        mean: &[f64],
-        std: &[f64],
-        device: &Device,
-    ) -> crate::training::PddmTrainModel {
-        let g = self.genres.len();
-        crate::training::PddmTrainModel {
-            denoiser: self.pddm.init(g, mean, std, &self.shift.schedule(), device),
-            discriminator: self
-                .use_discriminator
-                .then(|| self.discriminator.init(g, device)),
-        }
-    }
 }

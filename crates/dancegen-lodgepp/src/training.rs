@@ -13,7 +13,7 @@ use burn::nn::loss::CrossEntropyLossConfig;
 use burn::tensor::{Device, Int, Tensor, TensorData};
 
 use crate::choreo_gpt::ChoreoGpt;
-use crate::config::{BOUNDARY_FRAMES, PddmLossWeights, PrimitiveDropout};
+use crate::config::{BOUNDARY_FRAMES, PddmLossWeights, PddmTable, PrimitiveDropout};
 use crate::denoiser::{PddmCond, PddmDenoiser};
 use crate::discriminator::GenreDiscriminator;
 use crate::kinematics::{displacement, feet, joints};
@@ -73,6 +73,20 @@ pub fn gpt_loss(
 pub struct PddmTrainModel {
     pub denoiser: PddmDenoiser,
     pub discriminator: Option<GenreDiscriminator>,
+}
+
+/// Built here, beside the model it builds, so that the config does not depend on training.
+impl PddmTable {
+    /// The model with identity statistics (a checkpoint or bundle supplies the real ones).
+    pub fn init(&self, mean: &[f64], std: &[f64], device: &Device) -> PddmTrainModel {
+        let g = self.genres.len();
+        PddmTrainModel {
+            denoiser: self.pddm.init(g, mean, std, &self.shift.schedule(), device),
+            discriminator: self
+                .use_discriminator
+                .then(|| self.discriminator.init(g, device)),
+        }
+    }
 }
 
 /// Named loss terms of one PDDM batch; `total` is the weighted sum.
