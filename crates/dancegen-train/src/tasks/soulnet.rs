@@ -39,12 +39,8 @@ use crate::files;
 use crate::task::{Losses, TrainTask};
 use dancegen_soulnet::body_feet::BodyFeet;
 
-/// `[model] kind` of the part autoencoder.
-pub const KIND: &str = "soulnet_vq";
-/// `[model] kind` of the retrieval model.
-pub const MMR: &str = "soulnet_mmr";
-/// `[model] kind` of the generator.
-pub const MAGM: &str = "soulnet_magm";
+/// The `[model] kind`s of the three holistic runs (defined with the run readers).
+pub use super::soulnet_sources::{KIND, MAGM, MMR};
 
 /// The split layout's part widths with the 52 ARKit weights as the face.
 pub const PARTS: [usize; 3] = dancegen_soulnet::layout::PART_DIMS;

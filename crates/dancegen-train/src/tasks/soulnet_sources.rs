@@ -15,6 +15,13 @@ use dancegen_soulnet::generator::PartGenerator;
 
 use crate::files;
 
+/// `[model] kind` of the part autoencoder.
+pub const KIND: &str = "soulnet_vq";
+/// `[model] kind` of the retrieval model.
+pub const MMR: &str = "soulnet_mmr";
+/// `[model] kind` of the generator.
+pub const MAGM: &str = "soulnet_magm";
+
 /// The holistic model in `dir`, or `None` when `dir` holds no holistic model's `model.toml`
 /// (a run directory, say).
 pub fn holistic_model(dir: &Path) -> Result<Option<BundleConfig>, String> {
@@ -69,7 +76,7 @@ pub fn part_autoencoder(
     from: &Path,
     device: &Device,
 ) -> Result<(VqTable, PartAutoencoder, PathBuf), String> {
-    let (table, w, norm) = locate(from, super::soulnet::KIND, |b| b.vq, bundle_files::VQ)?;
+    let (table, w, norm) = locate(from, KIND, |b| b.vq, bundle_files::VQ)?;
     let ae = load(table.autoencoder().init(device), &w)?;
     Ok((table, ae, norm))
 }
@@ -81,7 +88,7 @@ pub fn retrieval(
     dropout: Option<f64>,
     device: &Device,
 ) -> Result<(MmrTable, MusicMotionRetrieval), String> {
-    let (table, w, _) = locate(from, super::soulnet::MMR, |b| b.mmr, bundle_files::MMR)?;
+    let (table, w, _) = locate(from, MMR, |b| b.mmr, bundle_files::MMR)?;
     let mut built = table.clone();
     if let Some(d) = dropout {
         built.dropout = d;
@@ -99,7 +106,7 @@ pub fn generator(
 ) -> Result<PartGenerator, String> {
     let (GeneratorOf(table), w, _) = locate(
         from,
-        super::soulnet::MAGM,
+        MAGM,
         |b| GeneratorOf(b.generator),
         bundle_files::GENERATOR,
     )?;
