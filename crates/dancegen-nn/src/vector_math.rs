@@ -137,26 +137,8 @@ pub fn gelu(x: f32) -> f32 {
     0.5 * x * erfc_neg
 }
 
-widest!(
-    /// GELU of every element, in place.
-    fn gelu_slice(xs: &mut [f32]) => gelu_slice_portable
-);
-
-#[inline(always)]
-fn gelu_slice_portable(xs: &mut [f32]) {
-    for v in xs {
-        *v = gelu(*v);
-    }
-}
-
-/// Elements per parallel task of [`gelu_tensor`].
+/// Elements per parallel task of the `*_tensor` activations.
 const CHUNK: usize = 1 << 14;
-
-/// Exact GELU: on the host for an inference `f32` tensor ([`crate::host_view::eligible`]),
-/// else Burn's op (autodiff, other backends).
-pub fn gelu_tensor<const D: usize>(x: Tensor<D>) -> Tensor<D> {
-    map_in_place(x, gelu_slice, burn::tensor::activation::gelu)
-}
 
 /// `f` over the elements of `x` in parallel chunks, in its own buffer, when `x` is an inference
 /// `f32` tensor on the flex backend; else `fallback` (Burn's op). The data is viewed as `f32`
@@ -192,48 +174,48 @@ pub fn mish(x: f32) -> f32 {
     if x > 20.0 { x } else { r }
 }
 
-widest!(
-    /// Mish of every element, in place.
-    fn mish_slice(xs: &mut [f32]) => mish_slice_portable
-);
-
-#[inline(always)]
-fn mish_slice_portable(xs: &mut [f32]) {
-    for v in xs {
-        *v = mish(*v);
-    }
-}
-
-/// Mish: on the host for an inference `f32` tensor ([`crate::host_view::eligible`]), else
-/// Burn's op.
-pub fn mish_tensor<const D: usize>(x: Tensor<D>) -> Tensor<D> {
-    map_in_place(x, mish_slice, burn::tensor::activation::mish)
-}
-
 /// The logistic function `1 / (1 + e⁻ˣ)` (−∞ → 0, +∞ → 1, NaN stays NaN).
 #[inline(always)]
 pub fn sigmoid(x: f32) -> f32 {
     1.0 / (1.0 + exp(-x))
 }
 
-widest!(
-    /// Sigmoid of every element, in place.
-    fn sigmoid_slice(xs: &mut [f32]) => sigmoid_slice_portable
-);
+/// For the scalar activation `$scalar`: `$slice`, the activation of every element of a slice in
+/// place (a plain loop over `$scalar`, vectorised by [`widest!`] through `$portable`), and
+/// `$tensor`, the activation of a tensor on the host when it is an inference `f32` tensor
+/// ([`crate::host_view::eligible`]), else Burn's `$fallback` (autodiff, other backends).
+macro_rules! elementwise {
+    ($scalar:ident => $slice:ident, $portable:ident, $(#[$meta:meta])* $tensor:ident, $fallback:path) => {
+        widest!(
+            /// The activation of every element, in place.
+            fn $slice(xs: &mut [f32]) => $portable
+        );
 
-#[inline(always)]
-fn sigmoid_slice_portable(xs: &mut [f32]) {
-    for v in xs {
-        *v = sigmoid(*v);
-    }
+        #[inline(always)]
+        fn $portable(xs: &mut [f32]) {
+            for v in xs {
+                *v = $scalar(*v);
+            }
+        }
+
+        $(#[$meta])*
+        pub fn $tensor<const D: usize>(x: Tensor<D>) -> Tensor<D> {
+            map_in_place(x, $slice, $fallback)
+        }
+    };
 }
 
-/// Sigmoid: on the host for an inference `f32` tensor ([`crate::host_view::eligible`]),
-/// vectorised and on the rayon workers, else Burn's op (which calls libm's `expf` per element
-/// on the calling thread: 3 % of group sampling's samples, with both workers idle).
-pub fn sigmoid_tensor<const D: usize>(x: Tensor<D>) -> Tensor<D> {
-    map_in_place(x, sigmoid_slice, burn::tensor::activation::sigmoid)
-}
+elementwise!(gelu => gelu_slice, gelu_slice_portable,
+    /// Exact GELU ([`gelu`]) of a tensor.
+    gelu_tensor, burn::tensor::activation::gelu);
+elementwise!(mish => mish_slice, mish_slice_portable,
+    /// Mish ([`mish`]) of a tensor.
+    mish_tensor, burn::tensor::activation::mish);
+elementwise!(sigmoid => sigmoid_slice, sigmoid_slice_portable,
+    /// Sigmoid ([`sigmoid`]) of a tensor: vectorised and on the rayon workers where Burn's op
+    /// calls libm's `expf` per element on the calling thread (3 % of group sampling's samples,
+    /// with both workers idle).
+    sigmoid_tensor, burn::tensor::activation::sigmoid);
 
 #[cfg(test)]
 mod tests {
