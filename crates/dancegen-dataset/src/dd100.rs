@@ -22,11 +22,13 @@ use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use rayon::prelude::*;
 
+use crate::clips::{create_dirs, gather_clips, write_couple_clip};
+use crate::error::DatasetError;
+use crate::inputs::{analyse_songs, check_hold_out};
 use crate::manifest::{ClipEntry, WarpReport};
-use crate::{
-    BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs,
-    check_hold_out, create_dirs, gather_clips, stem, write_couple_clip,
-};
+use crate::options::{BuildOptions, MIN_CLIP_FRAMES, Progress};
+use crate::song::stem;
+use crate::units::MotionUnit;
 
 /// Values per frame of a rotmat file.
 pub const ROTMAT_DIMS: usize = 3 + 55 * 9;

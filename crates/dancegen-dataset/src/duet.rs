@@ -23,13 +23,17 @@ use dancegen_metrics::FRAME_LEN;
 use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use rayon::prelude::*;
 
+use crate::beats::bas_bailando;
+use crate::clips::{create_dirs, gather_clips, write_couple_clip};
+use crate::error::DatasetError;
+use crate::genre;
+use crate::inputs::{analyse_songs, check_hold_out, expand_motion_inputs};
 use crate::manifest::{ClipEntry, WarpReport};
+use crate::options::{BuildOptions, MIN_CLIP_FRAMES, Progress};
+use crate::song::stem;
+use crate::song_plan::best_song;
+use crate::units::{MotionUnit, load_units, mirrored_unit, world_joints};
 use crate::warp::warp_motion;
-use crate::{
-    BuildOptions, DatasetError, MIN_CLIP_FRAMES, MotionUnit, Progress, analyse_songs, bas_bailando,
-    best_song, check_hold_out, create_dirs, expand_motion_inputs, gather_clips, genre, load_units,
-    mirrored_unit, stem, world_joints, write_couple_clip,
-};
 
 /// Two dancers recorded together.
 struct Couple {
@@ -173,7 +177,7 @@ pub(crate) fn build_duet(
 
 fn pair_couple(
     c: &Couple,
-    songs: &[crate::Song],
+    songs: &[crate::song::Song],
     train_songs: &[usize],
     held_songs: &[usize],
     opts: &BuildOptions,

@@ -23,10 +23,14 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use crate::{
-    BuildOptions, ClipEntry, DatasetError, Pairing, Progress, analyse_songs, check_hold_out,
-    create_dirs, gather_clips, genre, load_units, original_clip, stem, write_clip,
-};
+use crate::clips::{create_dirs, gather_clips, original_clip, write_clip};
+use crate::error::DatasetError;
+use crate::genre;
+use crate::inputs::{analyse_songs, check_hold_out};
+use crate::manifest::ClipEntry;
+use crate::options::{BuildOptions, Pairing, Progress};
+use crate::song::stem;
+use crate::units::load_units;
 
 /// FineDance's test split (`li-ronghui/LODGE:infer_lodge.py`; anchors.md C.3).
 pub const FINEDANCE_TEST: [&str; 20] = [
@@ -258,7 +262,7 @@ pub(crate) fn build_layout(
         .map(|p| {
             let song = &songs[by_path[p.song.as_path()]];
             let mut out = Vec::new();
-            for unit in load_units(&p.motion, &p.genre, &crate::takes::SourceRates::default())? {
+            for unit in load_units(&p.motion, &p.genre, &crate::rates::SourceRates::default())? {
                 if let Some(c) = original_clip(&unit, song, p.held_out)? {
                     out.push(write_clip(&opts.out, &c)?);
                 }

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::DatasetError;
+use crate::error::DatasetError;
 
 /// Version of the manifest layout.
 pub const MANIFEST_VERSION: u32 = 1;
@@ -104,7 +104,7 @@ pub struct Manifest {
 }
 
 impl Manifest {
-    /// Reads a manifest written by [`crate::build`].
+    /// Reads a manifest written by [`crate::build::build`].
     pub fn read(path: &Path) -> Result<Manifest, DatasetError> {
         let text = std::fs::read_to_string(path).map_err(|e| DatasetError::input(path, e))?;
         let m: Manifest = serde_json::from_str(&text)

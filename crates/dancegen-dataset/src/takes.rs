@@ -13,90 +13,10 @@ use dancegen_metrics::physical::{Physical, physical};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{DatasetError, MotionUnit, world_joints};
+pub use crate::rates::{RateFrom, SourceRates};
 
-/// Explicit capture rates of the inputs, `INPUT=FPS` entries.
-///
-/// `INPUT` is a `--motion` directory, a file, or a file name without extension; a file takes the
-/// rate of the most specific entry that names it (its stem or path before a directory, the
-/// deepest directory before a shallower one). `FPS` alone (no `INPUT=`) is every input's rate.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SourceRates {
-    entries: Vec<(Option<String>, f64)>,
-}
-
-impl SourceRates {
-    /// Parses `INPUT=FPS` or `FPS`; the rate must be in `(0, 1000]`.
-    pub fn parse_entry(s: &str) -> Result<(Option<String>, f64), String> {
-        let (key, fps) = match s.rsplit_once('=') {
-            Some((k, v)) if !k.trim().is_empty() => (Some(k.trim().to_string()), v),
-            Some(_) => return Err(format!("{s:?}: give INPUT=FPS or FPS")),
-            None => (None, s),
-        };
-        let fps: f64 = fps
-            .trim()
-            .parse()
-            .map_err(|_| format!("{s:?}: {fps:?} is not a number of frames per second"))?;
-        let fps = dancegen_formats::dispatch::check_source_fps(fps)?;
-        Ok((key, fps))
-    }
-
-    pub fn new(entries: Vec<(Option<String>, f64)>) -> Self {
-        SourceRates { entries }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
-    }
-
-    /// The given rate of `file`, if an entry names it.
-    pub fn rate_for(&self, file: &Path) -> Option<f64> {
-        let stem = crate::stem(file);
-        let mut best: Option<(usize, f64)> = None;
-        for (key, fps) in &self.entries {
-            let rank = match key {
-                None => Some(0),
-                Some(k) if *k == stem || Path::new(k) == file => Some(usize::MAX),
-                Some(k) if file.starts_with(k) => Some(1 + Path::new(k).components().count()),
-                Some(_) => None,
-            };
-            if let Some(r) = rank
-                && best.is_none_or(|(b, _)| r >= b)
-            {
-                best = Some((r, *fps));
-            }
-        }
-        best.map(|(_, f)| f)
-    }
-
-    /// Fails on an entry that names none of `files`: a typo would silently leave a take at
-    /// its header's rate.
-    pub fn check_used(&self, files: &[PathBuf]) -> Result<(), DatasetError> {
-        for (key, fps) in &self.entries {
-            let Some(k) = key else { continue };
-            let used = files
-                .iter()
-                .any(|f| crate::stem(f) == *k || f == Path::new(k) || f.starts_with(k));
-            if !used {
-                return Err(DatasetError::Options(format!(
-                    "--source-fps {k}={fps}: {k} names no --motion input (give a --motion \
-                     directory or file, or a file name without extension)"
-                )));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Where a take's rate came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RateFrom {
-    /// `--source-fps`.
-    Given,
-    /// The file's own header or rate field.
-    Header,
-}
+use crate::error::DatasetError;
+use crate::units::{MotionUnit, world_joints};
 
 /// One input take (one dancer of one motion file) as the data set reads it: at `source_fps`,
 /// resampled to 30 fps, retargeted to SMPL 24 and put on the floor. Figures are
@@ -209,7 +129,7 @@ pub fn measure_figures(
     rates: &SourceRates,
 ) -> Result<Vec<TakeFigures>, DatasetError> {
     let mut out = Vec::new();
-    for unit in crate::load_units(path, genre, rates)? {
+    for unit in crate::units::load_units(path, genre, rates)? {
         match unit_figures(&unit)? {
             Some(t) => out.push(t),
             // The pairing drops it too (shorter than a clip); nothing to measure or warn about.
@@ -231,12 +151,12 @@ pub fn measure_inputs(
     inputs: &[PathBuf],
     rates: &SourceRates,
 ) -> Result<Vec<TakeFigures>, DatasetError> {
-    let files = crate::expand_motion_inputs(inputs)?;
+    let files = crate::inputs::expand_motion_inputs(inputs)?;
     rates.check_used(&files)?;
     let per_file: Vec<Result<Vec<TakeFigures>, DatasetError>> = files
         .par_iter()
         .map(|path| {
-            let genre = crate::genre::genre_from_name(&crate::stem(path));
+            let genre = crate::genre::genre_from_name(&crate::song::stem(path));
             measure_figures(path, &genre, rates)
         })
         .collect();

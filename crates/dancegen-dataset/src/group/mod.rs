@@ -50,13 +50,16 @@ use dancegen_refine::formation::shapes::Shape;
 use dancegen_refine::formation::{StagePos, order_left_to_right};
 use rayon::prelude::*;
 
+use crate::beats::{bas_bailando, kinematic_beats};
 use crate::duet::{couple_key, slice};
+use crate::error::DatasetError;
+use crate::genre;
+use crate::inputs::{analyse_songs, check_hold_out, expand_motion_inputs};
 use crate::manifest::{ClipEntry, GroupLabels, PairingKind, WarpReport};
+use crate::options::{BuildOptions, FPS, Progress};
+use crate::song::{Song, stem};
+use crate::units::{MotionUnit, load_units, world_joints};
 use crate::warp::{match_beats_in_span, warp_motion};
-use crate::{
-    BuildOptions, DatasetError, FPS, MotionUnit, Progress, Song, analyse_songs, bas_bailando,
-    check_hold_out, expand_motion_inputs, genre, kinematic_beats, load_units, stem, world_joints,
-};
 use check::{Reject, check_scene, skating};
 use place::{couple_yaw, low_pass, place_couple, place_solo, root_xz, solo_yaw, travel_mismatch};
 use plan::{Plan, plan_formation, spacing_range, uniform};
@@ -328,7 +331,7 @@ pub(crate) fn build_group(
         std::fs::create_dir_all(&p)
             .map_err(|e| DatasetError::input(&p, format!("cannot create directory: {e}")))?;
     }
-    crate::create_dirs(&opts.out)?;
+    crate::clips::create_dirs(&opts.out)?;
     progress.stage("composing groups", jobs.len());
     let results: Vec<SampleResult> = jobs
         .par_iter()

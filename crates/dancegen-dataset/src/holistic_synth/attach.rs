@@ -23,7 +23,8 @@ use rayon::prelude::*;
 
 use super::hand_poses::HAND_JOINTS;
 use super::{FaceInputs, SynthInputs, synthesize_face, synthesize_hands};
-use crate::{ClipEntry, DatasetError};
+use crate::error::DatasetError;
+use crate::manifest::ClipEntry;
 
 /// EDGE-35 columns: onset envelope, chroma_cens, beat one-hot.
 const ONSET: usize = 0;
