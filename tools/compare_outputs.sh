@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Byte-for-byte comparison of what two `dancegen` binaries write, for a refactor that must not
 # change behaviour (issue 42): every system on the demo song, in every output format, plus a
-# character retarget, a BVH conversion and an AIST++ conversion.
+# character retarget, BVH and AIST++ conversions, and a pseudo-paired and a duet training set.
 #
 #   bash tools/compare_outputs.sh BEFORE_BIN AFTER_BIN [WORK_DIR]
 #
@@ -50,6 +50,12 @@ run "solo_mixamo.fbx" generate "$SONG" --seed 0 --rig mixamo -o @OUT@
 run "solo_on_character.glb" generate "$SONG" --seed 1 --character "$WORK/before/solo.glb" -o @OUT@
 run "salsa.npy" convert "$SALSA/61_14_scaled.bvh" --source-fps 60 --fps 30 -o @OUT@
 run "salsa.glb" convert "$SALSA/61_14_scaled.bvh" --source-fps 60 --fps 30 -o @OUT@
+# Training sets: a pseudo-paired and a duet data set from two salsa partners (folders).
+run "dataset_pseudo" dataset build --motion "$SALSA/60_01_scaled.bvh" "$SALSA/61_01_scaled.bvh" \
+    --source-fps "$SALSA=60" --music "$ROOT/../shared/data/music/sectoid/metal_madness.ogg" -o @OUT@
+run "dataset_duet" dataset build --pairing duet --motion "$SALSA/60_01_scaled.bvh" \
+    "$SALSA/61_01_scaled.bvh" --source-fps "$SALSA=60" \
+    --music "$ROOT/../shared/data/music/sectoid/metal_madness.ogg" -o @OUT@
 first_pkl=$(find "$AISTPP" -name '*.pkl' | sort | head -n 1)
 if [ -n "$first_pkl" ]; then
     run "aistpp.bvh" convert "$first_pkl" -o @OUT@
@@ -62,7 +68,15 @@ if [ "$(cd "$WORK/before" && ls)" != "$(cd "$WORK/after" && ls)" ]; then
 fi
 for f in "$WORK"/before/*; do
     name=$(basename "$f")
-    if cmp -s "$f" "$WORK/after/$name"; then
+    if [ -d "$f" ]; then
+        if diff -rq "$f" "$WORK/after/$name" >/dev/null; then
+            echo "same       $name/ ($(find "$f" -type f | wc -l) files)"
+        else
+            echo "DIFFERENT  $name/"
+            diff -rq "$f" "$WORK/after/$name" | head -n 5
+            fail=1
+        fi
+    elif cmp -s "$f" "$WORK/after/$name"; then
         echo "same       $name"
     else
         echo "DIFFERENT  $name"
