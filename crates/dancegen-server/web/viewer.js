@@ -7,7 +7,7 @@
  * the server cuts nothing, glb time 0 is the song at `start`), so picture and music cannot
  * drift, and pausing, scrubbing or slowing the song moves the dancers with it.
  *
- * GLB layout (crates/dancegen-motion/src/gltf.rs): one skin per dancer whose joint list is the
+ * GLB layout (crates/dancegen-formats/src/gltf.rs): one skin per dancer whose joint list is the
  * joint order of the .npy (SMPL 24); one dancer → mesh node `body`, several → mesh nodes
  * `dancer{d}` with joints `dancer{d}/<joint>`. Node names are not used for joints because
  * GLTFLoader sanitises them (`/` is dropped); joints are found by glTF node index through the
