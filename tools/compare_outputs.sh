@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Byte-for-byte comparison of what two `dancegen` binaries write, for a refactor that must not
 # change behaviour (issue 42): every system on the demo song, in every output format, plus a
-# character retarget, BVH and AIST++ conversions, and a pseudo-paired and a duet training set.
+# character retarget, the holistic face as Live Link CSV, a rendered frame, BVH and AIST++
+# conversions, and a pseudo-paired and a duet training set.
 #
 #   bash tools/compare_outputs.sh BEFORE_BIN AFTER_BIN [WORK_DIR]
 #
@@ -45,6 +46,8 @@ for ext in npy bvh glb fbx npz; do
     run "duet.$ext" generate "$SONG" --leader "$SALSA/60_13_scaled.bvh" --leader-fps 60 --seed 0 -o @OUT@
     run "group.$ext" generate "$SONG" --system group --dancers 3 --seed 0 -o @OUT@
 done
+run "holistic_face.csv" generate "$SONG" --system holistic --seed 0 -o @OUT@
+run "solo_frame.png" render "$SALSA/61_14_scaled.bvh" --source-fps 60 --frame 100 -o @OUT@
 run "solo_mixamo.fbx" generate "$SONG" --seed 0 --rig mixamo -o @OUT@
 # A character: the solo's own rigged .glb, given back as the character to dance.
 run "solo_on_character.glb" generate "$SONG" --seed 1 --character "$WORK/before/solo.glb" -o @OUT@
