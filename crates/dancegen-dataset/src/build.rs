@@ -5,10 +5,11 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
+use crate::FPS;
 use crate::error::DatasetError;
 use crate::inputs::expand_motion_inputs;
 use crate::manifest::{ClipEntry, MANIFEST_VERSION, Manifest};
-use crate::options::{BuildOptions, FPS, Pairing, Progress};
+use crate::options::{BuildOptions, Pairing, Progress};
 use crate::pseudo::build_pseudo;
 use crate::song::stem;
 use crate::{dd100, duet, genre, group, holistic_synth, layouts, takes};

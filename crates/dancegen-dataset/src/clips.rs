@@ -8,9 +8,9 @@ use dancegen_music::features::EDGE35_DIM;
 
 use crate::error::DatasetError;
 use crate::manifest::{ClipEntry, PairingKind, WarpReport};
-use crate::options::{FPS, MIN_CLIP_FRAMES};
 use crate::song::Song;
 use crate::units::{MotionUnit, world_joints};
+use crate::{FPS, MIN_CLIP_FRAMES};
 
 /// The clips of parallel jobs in job order, or the error of the first failing job in job order
 /// (so the message does not depend on which thread finished first).

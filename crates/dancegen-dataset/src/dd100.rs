@@ -22,11 +22,12 @@ use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use rayon::prelude::*;
 
+use crate::MIN_CLIP_FRAMES;
 use crate::clips::{create_dirs, gather_clips, write_couple_clip};
 use crate::error::DatasetError;
 use crate::inputs::{analyse_songs, check_hold_out};
 use crate::manifest::{ClipEntry, WarpReport};
-use crate::options::{BuildOptions, MIN_CLIP_FRAMES, Progress};
+use crate::options::{BuildOptions, Progress};
 use crate::song::stem;
 use crate::units::MotionUnit;
 

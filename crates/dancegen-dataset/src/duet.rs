@@ -23,13 +23,14 @@ use dancegen_metrics::FRAME_LEN;
 use dancegen_motion::repr::motion::{POSE_DIMS, SmplMotion};
 use rayon::prelude::*;
 
+use crate::MIN_CLIP_FRAMES;
 use crate::beats::bas_bailando;
 use crate::clips::{create_dirs, gather_clips, write_couple_clip};
 use crate::error::DatasetError;
 use crate::genre;
 use crate::inputs::{analyse_songs, check_hold_out, expand_motion_inputs};
 use crate::manifest::{ClipEntry, WarpReport};
-use crate::options::{BuildOptions, MIN_CLIP_FRAMES, Progress};
+use crate::options::{BuildOptions, Progress};
 use crate::song::stem;
 use crate::song_plan::best_song;
 use crate::units::{MotionUnit, load_units, mirrored_unit, world_joints};

@@ -49,6 +49,12 @@ mod summary;
 pub mod takes;
 mod units;
 
+/// Frame rate of every clip (motion and music), EDGE/Lodge's 30 fps.
+pub const FPS: u32 = 30;
+
+/// Clips shorter than this (1 s) are dropped: too short to train on.
+pub const MIN_CLIP_FRAMES: usize = 30;
+
 /// The beat warp lives in the refinement crate (the generation library aligns generated dances
 /// with it too); re-exported under its old path.
 pub use dancegen_refine::beat_warp as warp;
@@ -57,6 +63,6 @@ pub use beats::{bas_bailando, kinematic_beats};
 pub use build::{BuildReport, build};
 pub use error::DatasetError;
 pub use manifest::{ClipEntry, GroupLabels, MANIFEST_VERSION, Manifest, PairingKind, WarpReport};
-pub use options::{BuildOptions, FPS, MIN_CLIP_FRAMES, Pairing, Progress};
+pub use options::{BuildOptions, Pairing, Progress};
 pub use song::{Song, stem};
 pub use summary::summary_table;

@@ -2,14 +2,8 @@
 
 use std::path::PathBuf;
 
+use crate::rates::SourceRates;
 use crate::warp::WarpParams;
-use crate::{group, takes};
-
-/// Frame rate of every clip (motion and music), EDGE/Lodge's 30 fps.
-pub const FPS: u32 = 30;
-
-/// Clips shorter than this (1 s) are dropped: too short to train on.
-pub const MIN_CLIP_FRAMES: usize = 30;
 
 /// How motion and music are paired.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -17,20 +11,20 @@ pub enum Pairing {
     /// Beat-warp pseudo-pairing of `--motion` files with `--music` songs.
     Pseudo,
     /// Beat-warp pseudo-pairing of couples (`--motion` files of two partners each) with songs;
-    /// see [`duet`].
+    /// see [`crate::duet`].
     Duet,
-    /// DD100 (Duolando) duet layout under `root`; see [`dd100`].
+    /// DD100 (Duolando) duet layout under `root`; see [`crate::dd100`].
     Dd100,
     /// AIST++ layout under `root` (`motions/*.pkl`, `wav/<music id>.wav`, `splits/`).
     Aistpp,
     /// FineDance layout under `root` (`motion/*.npy`, `music_wav/*.wav`, `label_json/*.json`).
     FineDance,
     /// 2–5 dancers composed from `--motion` takes into formations and beat-warped onto
-    /// `--music` songs; see [`group`].
+    /// `--music` songs; see [`crate::group`].
     Group,
 }
 
-/// Options of [`build`].
+/// Options of [`crate::build()`].
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
     /// Output directory (created if missing).
@@ -51,12 +45,12 @@ pub struct BuildOptions {
     pub seed: u64,
     pub warp: WarpParams,
     /// Also trains on each training motion's left–right mirror image (clip `<name>_mirror`,
-    /// [`SmplMotion::mirror`], as EDGE and Lodge augment); held-out motions are never mirrored.
+    /// [`dancegen_motion::repr::motion::SmplMotion::mirror`], as EDGE and Lodge augment); held-out motions are never mirrored.
     /// Pseudo and duet pairing (a couple is mirrored as a whole, both partners in one world
     /// reflection, so it stays a couple).
     pub mirror: bool,
     /// Also give every clip **synthetic** fingers and an ARKit face made from its body and
-    /// music ([`holistic_synth::attach`]), for the holistic (SoulNet) system. Pseudo and AIST++
+    /// music ([`crate::holistic_synth::attach`]), for the holistic (SoulNet) system. Pseudo and AIST++
     /// pairing (bodies without real hands).
     pub holistic: bool,
     /// Training takes are paired with this many songs, best first (1: only the best; the
@@ -67,11 +61,11 @@ pub struct BuildOptions {
     /// its own is folded into a related one (e.g. the single CMU "dance, whirl" take into
     /// `modern`). Applied to every pairing's manifest.
     pub merge_genres: Vec<(String, String)>,
-    /// Group pairing only ([`group`]).
-    pub group: group::GroupOptions,
+    /// Group pairing only ([`crate::group`]).
+    pub group: GroupOptions,
     /// The rate each `motions` input was captured at, where its header is wrong or missing
-    /// ([`takes::SourceRates`]); the others are read at their header's rate.
-    pub source_fps: takes::SourceRates,
+    /// ([`SourceRates`]); the others are read at their header's rate.
+    pub source_fps: SourceRates,
 }
 
 impl BuildOptions {
@@ -91,8 +85,8 @@ impl BuildOptions {
             holistic: false,
             songs_per_motion: 1,
             merge_genres: Vec::new(),
-            group: group::GroupOptions::default(),
-            source_fps: takes::SourceRates::default(),
+            group: GroupOptions::default(),
+            source_fps: SourceRates::default(),
         }
     }
 }
@@ -106,3 +100,28 @@ pub trait Progress: Sync {
 }
 
 impl Progress for () {}
+
+/// Options of the group pairing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupOptions {
+    /// Training samples to compose.
+    pub samples: usize,
+    /// Held-out samples (from held-out takes, songs and shapes); 0 for none.
+    pub held_out_samples: usize,
+    /// Length of a sample in seconds.
+    pub clip_seconds: f64,
+    /// Formation shapes only the held-out samples use (group.md §4 holds out circle and
+    /// diamond).
+    pub hold_out_shapes: Vec<String>,
+}
+
+impl Default for GroupOptions {
+    fn default() -> Self {
+        GroupOptions {
+            samples: 200,
+            held_out_samples: 24,
+            clip_seconds: 10.0,
+            hold_out_shapes: Vec::new(),
+        }
+    }
+}

@@ -13,11 +13,12 @@ use crate::error::DatasetError;
 use crate::genre;
 use crate::inputs::{analyse_songs, check_hold_out, expand_motion_inputs};
 use crate::manifest::{ClipEntry, PairingKind, WarpReport};
-use crate::options::{BuildOptions, FPS, MIN_CLIP_FRAMES, Progress};
+use crate::options::{BuildOptions, Progress};
 use crate::song::{Song, stem};
 use crate::song_plan::{PiecePlan, ranked_songs};
 use crate::units::{MotionUnit, load_units, mirrored_unit, world_joints};
 use crate::warp::warp_motion;
+use crate::{FPS, MIN_CLIP_FRAMES};
 
 /// `Pairing::Pseudo`: every take, cut into pieces that fit a song, warped onto the beats of
 /// the song whose beats it matches best (`song_plan::ranked_songs`); held-out takes and songs

@@ -6,8 +6,8 @@ use dancegen_music::FrameMatrix;
 use dancegen_music::decode::AudioSource;
 use dancegen_music::features::{EDGE35_DIM, ExtractOptions, FeatureSet, extract};
 
+use crate::FPS;
 use crate::error::DatasetError;
-use crate::options::FPS;
 
 /// A song analysed once: its EDGE-35 features over the whole song and its beats.
 #[derive(Clone, Debug)]

@@ -5,9 +5,10 @@ use std::ops::Range;
 use dancegen_metrics::FRAME_LEN;
 
 use crate::beats::kinematic_beats;
-use crate::options::{BuildOptions, FPS, MIN_CLIP_FRAMES};
+use crate::options::BuildOptions;
 use crate::song::Song;
 use crate::warp::{BeatMatch, WarpParams, match_beats};
+use crate::{FPS, MIN_CLIP_FRAMES};
 
 /// Fraction of a song a motion piece may fill at the slowest allowed playback speed before
 /// the motion is split into several clips (leaves room for the start offset).

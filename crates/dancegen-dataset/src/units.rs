@@ -7,8 +7,8 @@ use dancegen_formats::dispatch::{
 };
 use dancegen_motion::repr::motion::SmplMotion;
 
+use crate::FPS;
 use crate::error::DatasetError;
-use crate::options::FPS;
 use crate::rates::{RateFrom, SourceRates};
 use crate::song::stem;
 

@@ -50,13 +50,15 @@ use dancegen_refine::formation::shapes::Shape;
 use dancegen_refine::formation::{StagePos, order_left_to_right};
 use rayon::prelude::*;
 
+use crate::FPS;
 use crate::beats::{bas_bailando, kinematic_beats};
 use crate::duet::{couple_key, slice};
 use crate::error::DatasetError;
 use crate::genre;
 use crate::inputs::{analyse_songs, check_hold_out, expand_motion_inputs};
 use crate::manifest::{ClipEntry, GroupLabels, PairingKind, WarpReport};
-use crate::options::{BuildOptions, FPS, Progress};
+pub use crate::options::GroupOptions;
+use crate::options::{BuildOptions, Progress};
 use crate::song::{Song, stem};
 use crate::units::{MotionUnit, load_units, world_joints};
 use crate::warp::{match_beats_in_span, warp_motion};
@@ -76,31 +78,6 @@ const PHRASE_BEATS: usize = 8;
 const CANON_BEATS: [usize; 3] = [1, 2, 4];
 /// Chance that a unison member dances the mirror image.
 const UNISON_MIRROR_CHANCE: f64 = 0.3;
-
-/// Options of the group pairing.
-#[derive(Clone, Debug, PartialEq)]
-pub struct GroupOptions {
-    /// Training samples to compose.
-    pub samples: usize,
-    /// Held-out samples (from held-out takes, songs and shapes); 0 for none.
-    pub held_out_samples: usize,
-    /// Length of a sample in seconds.
-    pub clip_seconds: f64,
-    /// Formation shapes only the held-out samples use (group.md §4 holds out circle and
-    /// diamond).
-    pub hold_out_shapes: Vec<String>,
-}
-
-impl Default for GroupOptions {
-    fn default() -> Self {
-        GroupOptions {
-            samples: 200,
-            held_out_samples: 24,
-            clip_seconds: 10.0,
-            hold_out_shapes: Vec::new(),
-        }
-    }
-}
 
 /// One usable take (or its mirror image).
 struct Source {
