@@ -186,10 +186,15 @@ fn modules(src: &Path) -> BTreeMap<Vec<String>, std::path::PathBuf> {
     out
 }
 
-/// The code of a file without comments and without its `#[cfg(test)]` part (test modules
-/// sit at the end of a file and may use anything).
+/// The code of a file without comments and without its test module (`#[cfg(test)] mod …`,
+/// at the end of a file, may use anything). A `#[cfg(test)]` on a single item mid-file (a
+/// reference implementation, say) does not end the code.
 fn code_of(text: &str) -> String {
-    let text = text.split("#[cfg(test)]").next().unwrap_or("");
+    let test_module = text.match_indices("#[cfg(test)]").find(|(i, m)| {
+        let rest = text[i + m.len()..].trim_start();
+        rest.starts_with("mod ") || rest.starts_with("pub mod ")
+    });
+    let text = &text[..test_module.map_or(text.len(), |(i, _)| i)];
     text.lines()
         .map(|l| match l.find("//") {
             Some(i) => &l[..i],
@@ -390,7 +395,8 @@ fn no_file_depends_on_itself_through_others() {
     );
 }
 
-/// The cycle finder sees `use crate::{..}` groups, `super::` paths and plain `crate::` paths.
+/// The cycle finder sees `use crate::{..}` groups, `super::` paths and plain `crate::` paths,
+/// skips comments and test modules, and reads on past a single `#[cfg(test)]` item.
 #[test]
 fn a_file_cycle_is_found() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -409,12 +415,12 @@ fn a_file_cycle_is_found() {
     std::fs::write(src.join("systems/mod.rs"), "pub mod solo;\n").unwrap();
     std::fs::write(
         src.join("systems/solo.rs"),
-        "pub struct SoloOptions(super::super::request::Common);\n",
+        "#[cfg(test)]\nfn reference() {}\npub struct SoloOptions(super::super::request::Common);\n",
     )
     .unwrap();
     std::fs::write(
         src.join("song.rs"),
-        "pub struct Song;\n#[cfg(test)]\nuse crate::request;\n",
+        "pub struct Song;\n#[cfg(test)]\nmod tests {\n    use crate::request;\n}\n",
     )
     .unwrap();
     let cycles = file_cycles(&src);
