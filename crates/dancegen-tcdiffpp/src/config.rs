@@ -90,6 +90,10 @@ pub struct LossWeights {
     pub contact: f64,
     /// Distance-consistency loss (Eq. 16–17); 0 is Table 4's "w/o L_D".
     pub distance: f64,
+    /// The released code's `dis_loss` (weight 100 there; not in the paper, so 0 by default):
+    /// each dancer's frame-to-frame root x/y change in x̂0 against x0's, on the normalised
+    /// channels. It is what keeps a predicted root from jumping between frames (issue 43).
+    pub root_velocity: f64,
 }
 
 impl Default for LossWeights {
@@ -100,6 +104,7 @@ impl Default for LossWeights {
             fk: 0.646,
             contact: 10.942,
             distance: 0.636,
+            root_velocity: 0.0,
         }
     }
 }

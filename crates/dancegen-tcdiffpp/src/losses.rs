@@ -11,7 +11,8 @@
 //! - `L_D`, Eq. 16–17: for every pair of dancers, the change of their relative root position
 //!   `(p_i − p_j) − (p̂_i − p̂_j)`, squared, summed over pairs, divided by `C − 1`, averaged
 //!   over frames. The released `dis_loss` (×100) is a per-dancer temporal Δroot error instead,
-//!   not pairwise (group.md §1 row 8); we implement the paper's.
+//!   not pairwise (group.md §1 row 8); we implement the paper's, and the released one as its
+//!   own term `λ_rootvel L_rootvel` (`[model.loss] root_velocity`, 0 by default).
 //!
 //! Formation control (issue #17, group.md §1 row 12 "Proposal"): with probability
 //! `1 − control_drop` a window trains controlled — each active dancer, with probability
@@ -64,6 +65,21 @@ pub fn channel_mask(dancers: &[usize], device: &Device) -> Tensor<3> {
         m.extend((0..GROUP_DIMS).map(|c| f32::from(u8::from(c / DIMS < n))));
     }
     Tensor::from_data(TensorData::new(m, [b, 1, GROUP_DIMS]), device)
+}
+
+/// The released code's `dis_loss`: the frame-to-frame change of every slot's root x/y in
+/// `pred` against `x0`'s (`[B, T, N_MAX·151]`, inactive slots zero in both), squared and
+/// averaged over the `active` dancers' root channels and the frame pairs.
+pub fn root_velocity(pred: Tensor<3>, x0: Tensor<3>, active: usize) -> Tensor<1> {
+    let [_, t, _] = pred.dims();
+    let device = pred.device();
+    let m: Vec<f32> = (0..GROUP_DIMS)
+        .map(|c| f32::from(u8::from(ROOT_HORIZONTAL.contains(&(c % DIMS)))))
+        .collect();
+    let mask = Tensor::<3>::from_data(TensorData::new(m, [1, 1, GROUP_DIMS]), &device);
+    let vel = |x: Tensor<3>| x.clone().narrow(1, 1, t - 1) - x.narrow(1, 0, t - 1);
+    ((vel(pred) - vel(x0)) * mask).powf_scalar(2.0).sum()
+        / (active * ROOT_HORIZONTAL.len() * (t - 1)) as f64
 }
 
 /// Which (frame, slot) roots a training window gets clean: `[B·T·N_MAX]` flags.
@@ -155,6 +171,7 @@ pub fn group_loss(
     let vel = |x: Tensor<3>| x.clone().narrow(1, 1, t - 1) - x.narrow(1, 0, t - 1);
     let velocity =
         (vel(pred.clone()) - vel(x0.clone())).powf_scalar(2.0).sum() / (per_frame * (t - 1) as f64);
+    let root_velocity = root_velocity(pred.clone(), x0.clone(), active);
 
     let skel = FkSkeleton::smpl24();
     // Empty slots get the rest pose before FK: a zero 6D vector has no direction, and the
@@ -199,7 +216,8 @@ pub fn group_loss(
         + velocity.clone() * weights.velocity
         + fk.clone() * weights.fk
         + contact.clone() * weights.contact
-        + distance.clone() * weights.distance;
+        + distance.clone() * weights.distance
+        + root_velocity.clone() * weights.root_velocity;
     GroupLosses {
         total,
         parts: vec![
@@ -208,6 +226,7 @@ pub fn group_loss(
             ("fk", fk),
             ("contact", contact),
             ("distance", distance),
+            ("root_velocity", root_velocity),
         ],
     }
 }

@@ -12,7 +12,7 @@ use dancegen_tcdiffpp::config::{DenoiserConfig, LongSampler, PrefixMode, Sequenc
 use dancegen_tcdiffpp::denoiser::{GroupCond, GroupDenoiser, MUSIC_DIMS, PreparedGroupDenoiser};
 use dancegen_tcdiffpp::footwork::lower_body_channels;
 use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, channel};
-use dancegen_tcdiffpp::losses::{GroupBatch, distance_consistency, group_loss};
+use dancegen_tcdiffpp::losses::{GroupBatch, distance_consistency, group_loss, root_velocity};
 use dancegen_tcdiffpp::sampler::{GroupRequest, GroupSampleOptions, RootXy, generate};
 use dancegen_tcdiffpp::swap::identity_code;
 
@@ -260,6 +260,42 @@ fn distance_consistency_is_equation_17() {
     let l = distance_consistency(tt(pred), tt(gt), &[n]).into_scalar::<f32>();
     // Frame 1: pairs (0,2) and (1,2) each off by 1 m → Σ = 2; / (C − 1) = 1; mean over 2 frames.
     assert!((l - 0.5).abs() < 1e-6, "{l}");
+}
+
+#[test]
+fn root_velocity_is_the_released_dis_loss_on_root_xy_only() {
+    let dev = device::inference();
+    let frames = 4;
+    let at = |cells: &[(usize, usize, f32)]| {
+        let mut v = vec![0f32; frames * GROUP_DIMS];
+        for &(f, c, x) in cells {
+            v[f * GROUP_DIMS + c] = x;
+        }
+        Tensor::<3>::from_data(TensorData::new(v, [1, frames, GROUP_DIMS]), &dev)
+    };
+    let x0 = at(&[]);
+    let loss =
+        |pred: Tensor<3>, active| root_velocity(pred, x0.clone(), active).into_scalar::<f32>();
+    // A one-frame jump of slot 1's root x: changes +1 then −1 over 3 frame pairs, 2 channels.
+    let jump = at(&[(1, channel(1, 4), 1.0)]);
+    assert!((loss(jump.clone(), 2) - 2.0 / (2.0 * 2.0 * 3.0)).abs() < 1e-6);
+    // The height (channel 6) and a rotation (channel 7) are not the root's x/y.
+    assert_eq!(
+        loss(at(&[(1, channel(0, 6), 1.0), (2, channel(0, 7), 3.0)]), 2),
+        0.0
+    );
+    // A root that moves as the data's does is not penalised, however far it travels.
+    let travel = at(&[
+        (1, channel(0, 5), 1.0),
+        (2, channel(0, 5), 2.0),
+        (3, channel(0, 5), 3.0),
+    ]);
+    assert!(
+        root_velocity(travel.clone(), travel, 2)
+            .into_scalar::<f32>()
+            .abs()
+            < 1e-9
+    );
 }
 
 #[test]
