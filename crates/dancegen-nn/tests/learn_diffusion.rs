@@ -24,7 +24,7 @@ use dancegen_nn::diffusion::pddm::ResidualShiftConfig;
 use dancegen_nn::diffusion::sampler::{CueActivity, EDGE_GUIDANCE};
 use dancegen_nn::diffusion::{
     ChannelScale, Conditioning, Cue, Denoiser, Guidance, Method, SampleOptions, Schedule,
-    SeededNoise, sample, x0_loss,
+    SeededNoise, Spacing, sample, x0_loss,
 };
 
 /// Mixture: four modes at (±0.5, ±0.5) with σ = 0.1 (inside EDGE's [−1, 1] clamp).
@@ -350,6 +350,7 @@ fn sampler_learns_a_2d_mixture() {
         method: Method::Ddim {
             steps: 50,
             eta: 0.0,
+            spacing: Spacing::Linear,
         },
         ..ddim.clone()
     };

@@ -19,8 +19,8 @@
 
 use dancegen_nn::burn;
 use dancegen_nn::diffusion::{
-    ChannelScale, Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, WeightSchedule,
-    sample_hooked,
+    ChannelScale, Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, Spacing,
+    WeightSchedule, sample_hooked,
 };
 use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
 
@@ -99,6 +99,7 @@ fn options(s: &LatentSampling, guidance: Guidance, seed: u64) -> SampleOptions {
         method: Method::Ddim {
             steps: s.steps,
             eta: s.eta,
+            spacing: Spacing::Linear,
         },
         clip_x0: Some((-1.0, 1.0)),
         guidance,

@@ -75,6 +75,7 @@ impl Bench {
         let opts = GroupSampleOptions {
             steps,
             eta: defaults.eta,
+            spacing: defaults.spacing,
             guidance,
             sampler,
             prefix: defaults.prefix,

@@ -6,6 +6,7 @@
 //! "Model size" (d = 128–192, 4 layers, 4 heads, N_max = 5 with masks, 150 frames, DDIM 20).
 //! Every ablation of the paper's Table 4 is a switch here.
 
+use dancegen_nn::diffusion::Spacing;
 use serde::{Deserialize, Serialize};
 
 /// Which mixer follows the self-attention in each Sequence Decoder layer.
@@ -50,6 +51,11 @@ pub struct DenoiserConfig {
     pub footwork: bool,
     /// Hidden width of the footwork adaptor (released: 128).
     pub footwork_hidden: usize,
+    /// Our option, not the paper's: the adaptor adds a correction to the decoder's lower-body
+    /// rotations (`x + FA(x)`, its last layer starting at zero) instead of replacing them. The
+    /// replacing adaptor of the small model learns one crossed-shin pose and holds it
+    /// whatever the decoder says (docs/group-collapse.md, "The footwork adaptor").
+    pub footwork_residual: bool,
 }
 
 impl Default for DenoiserConfig {
@@ -69,6 +75,7 @@ impl Default for DenoiserConfig {
             swap_mode: true,
             footwork: true,
             footwork_hidden: 128,
+            footwork_residual: false,
         }
     }
 }
@@ -157,6 +164,8 @@ pub struct SamplingConfig {
     pub steps: usize,
     /// DDIM eta (released: 1).
     pub eta: f64,
+    /// Which timesteps the DDIM steps visit (released: EDGE's linear spacing).
+    pub spacing: Spacing,
     /// Guidance weight (EDGE / TCDiff++: 2).
     pub guidance: f64,
     pub sampler: LongSampler,
@@ -173,6 +182,7 @@ impl Default for SamplingConfig {
             // target of issue #17 needs on 2 cores.
             steps: 6,
             eta: 1.0,
+            spacing: Spacing::Linear,
             guidance: 2.0,
             // docs/group-eval.md: on the held-out set LGDS's joins had a boundary jerk of 7.1
             // and root steps up to 0.7 m (free dances), the parallel sampler 1.2 and 0.17 m.

@@ -140,9 +140,9 @@ impl DenoiserConfig {
                 .map(|_| CrossMambaLayer::new(d, self.n_heads, self.d_ff, self.dropout, device))
                 .collect(),
             output: LinearConfig::new(d, DIMS).init(device),
-            footwork: self
-                .footwork
-                .then(|| FootworkAdaptor::new(self.footwork_hidden, device)),
+            footwork: self.footwork.then(|| {
+                FootworkAdaptor::new(self.footwork_hidden, self.footwork_residual, device)
+            }),
             denorm: Denormalize::from_mean_std(mean, std, device),
             d_model: d,
             positioning: self.positioning,

@@ -7,12 +7,16 @@
 //! the raw prediction; the adaptor's output replaces the 6D rotations of joints
 //! [`LOWER_BODY`] only, so root, contacts and upper body stay the decoder's. It runs inside the
 //! denoiser, on x̂0 at every step.
+//!
+//! Our option ([`crate::config::DenoiserConfig::footwork_residual`]): the adaptor's output is
+//! added to the decoder's lower-body rotations instead of replacing them, and its last layer
+//! starts at zero, so it begins as the identity and learns a correction.
 
 use dancegen_nn::burn;
 use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, rot6d};
 
 use burn::module::Module;
-use burn::nn::{Linear, LinearConfig};
+use burn::nn::{Initializer, Linear, LinearConfig};
 use burn::tensor::activation::leaky_relu;
 use burn::tensor::{Device, Tensor, TensorData};
 
@@ -46,6 +50,20 @@ impl ConcatSquashLinear {
         }
     }
 
+    /// A layer whose output starts at zero (its `W` and `B` are zero; the gate is not).
+    pub fn silent(d_in: usize, d_out: usize, d_ctx: usize, device: &Device) -> Self {
+        Self {
+            layer: LinearConfig::new(d_in, d_out)
+                .with_initializer(Initializer::Zeros)
+                .init(device),
+            hyper_gate: LinearConfig::new(d_ctx, d_out).init(device),
+            hyper_bias: LinearConfig::new(d_ctx, d_out)
+                .with_bias(false)
+                .with_initializer(Initializer::Zeros)
+                .init(device),
+        }
+    }
+
     pub fn forward(&self, x: Tensor<3>, ctx: Tensor<3>) -> Tensor<3> {
         let gate = vector_math::sigmoid_tensor(host_linear::forward(&self.hyper_gate, ctx.clone()));
         host_linear::forward(&self.layer, x) * gate + host_linear::forward(&self.hyper_bias, ctx)
@@ -58,6 +76,9 @@ pub struct FootworkAdaptor {
     pub csl1: ConcatSquashLinear,
     pub csl2: ConcatSquashLinear,
     pub csl3: ConcatSquashLinear,
+    /// `x + FA(x)` on the lower body instead of `FA(x)`.
+    #[module(skip)]
+    pub residual: bool,
 }
 
 /// Channels of the replaced rotations.
@@ -69,11 +90,16 @@ pub fn lower_body_channels() -> Vec<usize> {
 }
 
 impl FootworkAdaptor {
-    pub fn new(hidden: usize, device: &Device) -> Self {
+    pub fn new(hidden: usize, residual: bool, device: &Device) -> Self {
         Self {
             csl1: ConcatSquashLinear::new(DIMS, hidden, CONTEXT_DIMS, device),
             csl2: ConcatSquashLinear::new(hidden, hidden, CONTEXT_DIMS, device),
-            csl3: ConcatSquashLinear::new(hidden, DIMS, CONTEXT_DIMS, device),
+            csl3: if residual {
+                ConcatSquashLinear::silent(hidden, DIMS, CONTEXT_DIMS, device)
+            } else {
+                ConcatSquashLinear::new(hidden, DIMS, CONTEXT_DIMS, device)
+            },
+            residual,
         }
     }
 
@@ -95,7 +121,8 @@ impl FootworkAdaptor {
         Tensor::cat(vec![zero, d], 1).reshape([b, k, CONTEXT_DIMS])
     }
 
-    /// The final x̂0 tokens: `raw`'s, with the lower-body rotations the adaptor's (Eq. 11).
+    /// The final x̂0 tokens: `raw`'s, with the lower-body rotations the adaptor's (Eq. 11), or
+    /// `raw`'s plus the adaptor's when residual.
     pub fn forward(&self, raw: Tensor<3>) -> Tensor<3> {
         let ctx = Self::context(raw.clone());
         let h = leaky_relu(self.csl1.forward(raw.clone(), ctx.clone()), LEAKY_SLOPE);
@@ -110,6 +137,9 @@ impl FootworkAdaptor {
         let sel = Tensor::<1>::from_data(TensorData::new(sel, [c]), &device)
             .reshape([1, 1, c])
             .expand([b, k, c]);
+        if self.residual {
+            return raw + adapted * sel;
+        }
         let keep = sel.clone().neg() + 1.0;
         raw * keep + adapted * sel
     }

@@ -28,7 +28,8 @@ use dancegen_nn::burn;
 use dancegen_nn::diffusion::longform::{ChannelLayout, stitch};
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::diffusion::{
-    Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, WeightSchedule, sample_with,
+    Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, Spacing, WeightSchedule,
+    sample_with,
 };
 use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, ROT6D_START};
 use dancegen_nn::progress::{Cancelled, StepHook};
@@ -58,6 +59,7 @@ pub struct GroupRequest<'a> {
 pub struct GroupSampleOptions {
     pub steps: usize,
     pub eta: f64,
+    pub spacing: Spacing,
     pub guidance: f64,
     pub sampler: LongSampler,
     pub prefix: PrefixMode,
@@ -120,6 +122,7 @@ fn sample_options(
         method: Method::Ddim {
             steps: opts.steps,
             eta: opts.eta,
+            spacing: opts.spacing,
         },
         // Mean/std-normalised data is not confined to [−1, 1] (EDGE's min-max range).
         clip_x0: None,

@@ -5,7 +5,7 @@
 use dancegen_nn::burn::optim::{AdamWConfig, GradientsParams};
 use dancegen_nn::burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use dancegen_nn::device;
-use dancegen_nn::diffusion::{Conditioning, Denoiser, Schedule};
+use dancegen_nn::diffusion::{Conditioning, Denoiser, Schedule, Spacing};
 use dancegen_nn::edge151::DIMS;
 use dancegen_nn::progress::NoHook;
 use dancegen_tcdiffpp::config::{DenoiserConfig, LongSampler, PrefixMode, SequenceMixer};
@@ -369,6 +369,8 @@ fn both_long_samplers_follow_requested_paths_and_are_seeded() {
             let opts = GroupSampleOptions {
                 steps: 4,
                 eta: 1.0,
+                spacing: Spacing::Linear,
+                spacing: Spacing::Linear,
                 guidance: 2.0,
                 sampler,
                 prefix,
@@ -437,6 +439,7 @@ fn the_mamba_decoder_samples_long_dances() {
     let opts = GroupSampleOptions {
         steps: 3,
         eta: 1.0,
+        spacing: Spacing::Linear,
         guidance: 1.0,
         sampler: LongSampler::Lgds,
         prefix: PrefixMode::Clean,

@@ -202,6 +202,7 @@ impl DanceSystem for Group {
         let sample = GroupSampleOptions {
             steps: common.steps.unwrap_or(sampling.steps),
             eta: sampling.eta,
+            spacing: sampling.spacing,
             guidance: common.guidance.unwrap_or(sampling.guidance),
             sampler: opts.sampler.unwrap_or(if partial {
                 // The parallel sampler drops control in windows whose first frame does not

@@ -34,8 +34,55 @@ pub const EDGE_DDPM_LOW_T_FRACTION: f64 = 0.1;
 pub enum Method {
     /// All T steps, posterior mean + `exp(½ log σ²_t) · z` (no noise into t = −1).
     Ddpm,
-    /// `steps` strided steps with stochasticity `eta` (0 = deterministic DDIM, 1 = EDGE).
-    Ddim { steps: usize, eta: f64 },
+    /// `steps` strided steps with stochasticity `eta` (0 = deterministic DDIM, 1 = EDGE),
+    /// at the timesteps `spacing` picks.
+    Ddim {
+        steps: usize,
+        eta: f64,
+        spacing: Spacing,
+    },
+}
+
+/// Which timesteps a strided DDIM visits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spacing {
+    /// EDGE's evenly spaced steps ([`ddim_timesteps`]).
+    #[default]
+    Linear,
+    /// Steps spaced as `(i / steps)²` of the schedule (DDIM paper, Song et al. 2021, App.
+    /// D.2), so the last x̂0 is predicted from a nearly clean input: with few steps the linear
+    /// spacing predicts it from `t ≈ T / steps`, where a network that has not learned to
+    /// remove all of that noise passes it to the output as frame-to-frame jitter.
+    Quadratic,
+}
+
+/// The `(t, t_next)` pairs of a strided DDIM under `spacing`; the last pair goes to −1.
+pub fn ddim_timesteps_spaced(
+    timesteps: usize,
+    steps: usize,
+    spacing: Spacing,
+) -> Vec<(usize, i64)> {
+    match spacing {
+        Spacing::Linear => ddim_timesteps(timesteps, steps),
+        Spacing::Quadratic => {
+            assert!(
+                steps >= 1 && steps <= timesteps,
+                "DDIM steps must be in 1..=T"
+            );
+            let last = timesteps as i64 - 1;
+            let s2 = (steps * steps) as i64;
+            // ⌊(T − 1) · i² / steps²⌋ in integers (no float truncation surprises), kept strictly
+            // increasing: a step that would repeat its predecessor moves up by one.
+            let mut times = vec![-1i64];
+            for i in 1..=steps as i64 {
+                let prev = *times.last().expect("starts with -1");
+                times.push((last * i * i / s2).max(prev + 1).min(last));
+            }
+            times.reverse();
+            times.windows(2).map(|w| (w[0] as usize, w[1])).collect()
+        }
+    }
 }
 
 /// The `(t, t_next)` pairs EDGE's `ddim_sample` visits: `int(linspace(−1, T − 1, steps + 1))`
@@ -305,6 +352,7 @@ impl SampleOptions {
             method: Method::Ddim {
                 steps: EDGE_DDIM_STEPS,
                 eta: EDGE_DDIM_ETA,
+                spacing: Spacing::Linear,
             },
             clip_x0: Some(EDGE_CLIP),
             guidance: Guidance::Scale(EDGE_GUIDANCE),
@@ -403,7 +451,7 @@ pub fn sample_with<M: Denoiser>(
     let big_t = schedule.timesteps();
     let pairs: Vec<(usize, i64)> = match opts.method {
         Method::Ddpm => (0..big_t).rev().map(|t| (t, t as i64 - 1)).collect(),
-        Method::Ddim { steps, .. } => ddim_timesteps(big_t, steps),
+        Method::Ddim { steps, spacing, .. } => ddim_timesteps_spaced(big_t, steps, spacing),
     };
     let n = pairs.len();
     let mut rng = SeededNoise::new(opts.seed);
@@ -460,4 +508,40 @@ pub fn sample_with<M: Denoiser>(
         progress::step(hook, DENOISING, i + 1, n)?;
     }
     Ok(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quadratic_spacing_ends_near_zero_and_never_repeats() {
+        // Six steps on T = 1000: ⌊999 · i² / 36⌋ for i = 6..1, then −1.
+        let q: Vec<(usize, i64)> = ddim_timesteps_spaced(1000, 6, Spacing::Quadratic);
+        assert_eq!(
+            q,
+            vec![
+                (999, 693),
+                (693, 444),
+                (444, 249),
+                (249, 111),
+                (111, 27),
+                (27, -1)
+            ]
+        );
+        // EDGE's linear spacing predicts the output from t = 165 instead.
+        assert_eq!(
+            ddim_timesteps_spaced(1000, 6, Spacing::Linear).last(),
+            Some(&(165, -1))
+        );
+        // As many steps as T: every timestep once, strictly decreasing.
+        for steps in [1, 2, 50, 200, 1000] {
+            let p = ddim_timesteps_spaced(1000, steps, Spacing::Quadratic);
+            assert_eq!(p.len(), steps);
+            assert_eq!(p[0].0, 999);
+            assert_eq!(p.last().unwrap().1, -1);
+            assert!(p.iter().all(|&(t, n)| (t as i64) > n), "{steps}: {p:?}");
+            assert!(p.windows(2).all(|w| w[0].1 == w[1].0 as i64));
+        }
+    }
 }
