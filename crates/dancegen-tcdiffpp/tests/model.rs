@@ -239,6 +239,32 @@ fn footwork_adaptor_touches_only_the_lower_body() {
 }
 
 #[test]
+fn a_residual_footwork_adaptor_starts_as_the_identity_and_then_corrects_the_lower_body() {
+    let dev = device::inference();
+    let cfg = DenoiserConfig {
+        footwork_residual: true,
+        ..tiny(SequenceMixer::CrossAttention)
+    };
+    let mut m = net(&cfg, &dev);
+    let raw = Tensor::<3>::random([1, T * N_MAX, DIMS], Distribution::Normal(0.0, 1.0), &dev);
+    let fa = m.footwork.as_ref().expect("footwork on by default");
+    assert_eq!(values(fa.forward(raw.clone())), values(raw.clone()));
+    // Once its last layer is not silent, it adds to the lower body and nothing else.
+    let fa = m.footwork.as_mut().unwrap();
+    fa.csl3.layer.weight = fa.csl3.layer.weight.clone().map(|w| w.ones_like());
+    let out = values(m.footwork.as_ref().unwrap().forward(raw.clone()));
+    let lower = lower_body_channels();
+    let raw = values(raw);
+    for (i, (o, r)) in out.iter().zip(&raw).enumerate() {
+        if lower.contains(&(i % DIMS)) {
+            assert!((o - r).abs() > 1e-6, "channel {} not corrected", i % DIMS);
+        } else {
+            assert_eq!(o, r, "channel {} must stay the decoder's", i % DIMS);
+        }
+    }
+}
+
+#[test]
 fn distance_consistency_is_equation_17() {
     let dev = device::inference();
     let (b, t, n) = (1, 2, 3);
@@ -369,7 +395,6 @@ fn both_long_samplers_follow_requested_paths_and_are_seeded() {
             let opts = GroupSampleOptions {
                 steps: 4,
                 eta: 1.0,
-                spacing: Spacing::Linear,
                 spacing: Spacing::Linear,
                 guidance: 2.0,
                 sampler,
