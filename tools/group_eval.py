@@ -53,6 +53,7 @@ from solo_eval import (  # noqa: E402  (shared .npy I/O, jerk, formatting, physi
 FPS = 30
 KEYFRAME_EVERY = 30  # frames between formation keyframes taken from a sample's trajectories
 MIN_SEPARATION_M = 0.45  # dancegen_refine::formation::MIN_SEPARATION_M
+TELEPORT_M = 0.25  # a root step larger than this in one frame is a teleport (issue 43)
 JOIN_BAND = 5  # frames either side of a join searched for a root jump (group.md §4)
 LOW_PASS_SIGMA = 8.0  # dataset group composer's low-pass σ (frames), for placing B1
 HELD_TAKES = ["60_13_scaled", "61_13_scaled", "60_14_scaled", "61_14_scaled"]
@@ -795,91 +796,94 @@ def worst_dancer(results, cfg, seeds, key, worst=max):
 
 
 def issue43_targets(w, results, seeds, real_solo, fid_b1):
-    """The "Done when" of issue 43 (the group model out of its collapse), for the full system."""
-    if ("full", seeds[0]) not in results:
+    """The "Done when" of issue 43 (the group model out of its collapse), for the full system
+    (formation control) and the free dance side by side."""
+    cfgs = [c for c in ("full", "free") if (c, seeds[0]) in results]
+    if not cfgs:
         return
-    g = lambda f: stats(per_seed(results, "full", seeds, f))[0]  # noqa: E731
     real = json.load(open(real_solo["physical_json"]))
-    spread, real_spread = g(lambda r: r["spread"]), real_solo.get("spread")
-    diffs = []
-    if len(seeds) > 1:
-        for a, b in zip(results[("full", seeds[0])]["scene_paths"],
-                        results[("full", seeds[1])]["scene_paths"]):
-            diffs.append(seed_difference_cm(a, b))
-    diff = mean_or_none(diffs)
-    contrast = g(lambda r: r["closest_contrast"])
-    unison = g(lambda r: r["closest_unison"])
-    fid = g(lambda r: r["dancers"].get("fid_k"))
-    coll = g(lambda r: r["scenes"].get("collision"))
-    step = max(results[("full", s)]["root_step"] for s in seeds if ("full", s) in results)
-    margins = [m for s in seeds if ("full", s) in results for m in results[("full", s)]["bas_margin"]]
-    tr = g(lambda r: mean_or_none([m.get("trajectory_error_mean_m") for _, m in r["metas"]]))
-    order = g(lambda r: end_order_ok([c for c, _ in r["metas"]], r))
+    real_spread = real_solo.get("spread")
+    rm = lambda k: statistics.fmean(  # noqa: E731
+        [r[k] for r in real.get("per_clip", []) if r.get(k) is not None] or [float("nan")])
+    lc, jk, fs, fl = rm("leg_cross"), rm("jerk"), rm("foot_slide"), rm("float")
+    floor = [r["floor_median"] for r in real.get("per_clip", []) if r.get("floor_median") is not None]
+    flo, fhi = min(floor) - 0.03, max(floor) + 0.03
 
     def num(x, d=3):
         return "n/a" if x is None else f"{x:.{d}f}"
 
-    def check(v, ok):
-        return "n/a" if v is None or ok is None else ("met" if ok else "**not met**")
+    def cell(v, ok, d=3):
+        return f"{num(v, d)} ({'n/a' if v is None or ok is None else 'met' if ok else '**not met**'})"
 
-    rows = []
+    def figures(cfg):
+        g = lambda f: stats(per_seed(results, cfg, seeds, f))[0]  # noqa: E731
+        diffs = []
+        if len(seeds) > 1:
+            for a, b in zip(results[(cfg, seeds[0])]["scene_paths"],
+                            results[(cfg, seeds[1])]["scene_paths"]):
+                diffs.append(seed_difference_cm(a, b))
+        spread, diff = g(lambda r: r["spread"]), mean_or_none(diffs)
+        contrast, unison = g(lambda r: r["closest_contrast"]), g(lambda r: r["closest_unison"])
+        fid, coll = g(lambda r: r["dancers"].get("fid_k")), g(lambda r: r["scenes"].get("collision"))
+        step = max(results[(cfg, s)]["root_step"] for s in seeds if (cfg, s) in results)
+        margins = [m for s in seeds if (cfg, s) in results for m in results[(cfg, s)]["bas_margin"]]
+        worst_margin = min(margins) if margins else None
+        tr = g(lambda r: mean_or_none([m.get("trajectory_error_mean_m") for _, m in r["metas"]]))
+        order = g(lambda r: end_order_ok(None, r)) if cfg == "full" else None
+        wd = lambda k, f=max: worst_dancer(results, cfg, seeds, k, f)  # noqa: E731
+        lo, hi = wd("floor_median", min), wd("floor_median")
+        return [
+            cell(spread, None if spread is None or real_spread is None else spread >= 0.7 * real_spread, 2),
+            cell(diff, None if diff is None else diff >= 5.0, 2),
+            cell(contrast, None if contrast is None else contrast >= 3.0, 2),
+            num(unison, 2),
+            cell(fid, None if fid is None or fid_b1 is None else fid <= fid_b1, 1),
+            cell(None if coll is None else 100 * coll, None if coll is None else coll <= 0.01, 2),
+            cell(step, step <= TELEPORT_M),
+            cell(worst_margin, None if worst_margin is None else worst_margin >= 0.03),
+            f"{sum(m >= 0.03 for m in margins)} of {len(margins)}" if margins else "n/a",
+            cell(tr, None if tr is None else tr <= 0.05) if cfg == "full" else "-",
+            cell(None if order is None else 100 * order, None if order is None else order >= 1.0, 0)
+            if cfg == "full" else "-",
+            *[cell(v, None if v is None else ok(v)) for v, ok in [
+                (wd("leg_cross"), lambda v: v <= lc + 2),
+                (wd("jerk"), lambda v: v <= 1.5 * jk),
+                (wd("foot_slide"), lambda v: v <= 1.5 * fs),
+                (wd("float"), lambda v: v <= fl + 5)]],
+            f"{num(lo)} .. {num(hi)} ({'n/a' if lo is None else 'met' if lo >= flo and hi <= fhi else '**not met**'})",
+        ]
 
-    def row(name, v, bound, ok, d=3):
-        rows.append((name, num(v, d), bound, check(v, ok)))
-
-    row("pose spread cm ≥ 0.7 × real", spread,
-        f"≥ {num(None if real_spread is None else 0.7 * real_spread, 2)}",
-        None if spread is None or real_spread is None else spread >= 0.7 * real_spread, 2)
-    row("seeds differ cm (seeds 0 and 1)", diff, "≥ 5", None if diff is None else diff >= 5.0, 2)
-    row("closest pair of dancers cm, contrast scenes", contrast, "≥ 3",
-        None if contrast is None else contrast >= 3.0, 2)
-    rows.append(("closest pair of dancers cm, unison scenes (reported)", num(unison, 2), "-", "-"))
-    row("FID_k ≤ B1's", fid, f"≤ {num(fid_b1, 1)}",
-        None if fid is None or fid_b1 is None else fid <= fid_b1, 1)
-    row("collisions % of frames", None if coll is None else 100 * coll, "≤ 1",
-        None if coll is None else coll <= 0.01, 2)
-    row("largest root step in one frame m (anywhere, every dancer and seed)", step, "≤ 0.25",
-        step <= 0.25)
-    worst_margin = min(margins) if margins else None
-    row("BAS − BAS against half-beat-shifted beats, worst dancer", worst_margin, "≥ 0.03",
-        None if worst_margin is None else worst_margin >= 0.03)
-    if margins:
-        rows.append(("  dancers with that margin ≥ 0.03",
-                     f"{sum(m >= 0.03 for m in margins)} of {len(margins)}", "-", "-"))
-    row("trajectory error mean m", tr, "≤ 0.05", None if tr is None else tr <= 0.05)
-    row("end order as requested %", None if order is None else 100 * order, "100",
-        None if order is None else order >= 1.0, 0)
-    # Physical: every dancer against the held-out real tracks' mean (the solo's bounds).
-    rm = lambda k: statistics.fmean(  # noqa: E731
-        [r[k] for r in real.get("per_clip", []) if r.get(k) is not None] or [float("nan")])
-    lc, jk, fs, fl = (rm("leg_cross"), rm("jerk"), rm("foot_slide"), rm("float"))
-    for key, bound, ok in [
-        ("leg_cross", f"≤ {lc + 2:.1f} (real + 2 points)", lambda v: v <= lc + 2),
-        ("jerk", f"≤ {1.5 * jk:.0f} (1.5 × real)", lambda v: v <= 1.5 * jk),
-        ("foot_slide", f"≤ {1.5 * fs:.3f} (1.5 × real)", lambda v: v <= 1.5 * fs),
-        ("float", f"≤ {fl + 5:.1f} (real + 5 points)", lambda v: v <= fl + 5),
-    ]:
-        v = worst_dancer(results, "full", seeds, key)
-        row(f"{key}, worst dancer", v, bound, None if v is None else ok(v), 3)
-    for key in ("floor_median",):
-        lo = worst_dancer(results, "full", seeds, key, min)
-        hi = worst_dancer(results, "full", seeds, key, max)
-        rlo = min(r[key] for r in real["per_clip"] if r.get(key) is not None)
-        rhi = max(r[key] for r in real["per_clip"] if r.get(key) is not None)
-        ok = None if lo is None else (lo >= rlo - 0.03 and hi <= rhi + 0.03)
-        rows.append((f"{key} m, every dancer", f"{num(lo)} .. {num(hi)}",
-                     f"{rlo - 0.03:.3f} .. {rhi + 0.03:.3f} (real ± 3 cm)", check(lo, ok)))
+    names = [
+        ("pose spread cm", f"≥ {num(None if real_spread is None else 0.7 * real_spread, 2)} (0.7 × real)"),
+        ("seeds differ cm (seeds 0 and 1)", "≥ 5"),
+        ("closest pair of dancers cm, contrast scenes", "≥ 3"),
+        ("closest pair of dancers cm, unison scenes (reported)", "-"),
+        ("FID_k", f"≤ B1's {num(fid_b1, 1)}"),
+        ("collisions % of frames", "≤ 1"),
+        ("largest root step in one frame m (every dancer and seed)", f"≤ {TELEPORT_M}"),
+        ("BAS − BAS against half-beat-shifted beats, worst dancer", "≥ 0.03"),
+        ("  dancers with that margin ≥ 0.03", "-"),
+        ("trajectory error mean m", "≤ 0.05"),
+        ("end order as requested %", "100"),
+        ("leg_cross %, worst dancer", f"≤ {lc + 2:.1f} (real + 2 points)"),
+        ("jerk m/s³, worst dancer", f"≤ {1.5 * jk:.0f} (1.5 × real)"),
+        ("foot_slide m/s, worst dancer", f"≤ {1.5 * fs:.3f} (1.5 × real)"),
+        ("float %, worst dancer", f"≤ {fl + 5:.1f} (real + 5 points)"),
+        ("floor_median m, every dancer", f"{flo:.3f} .. {fhi:.3f} (real ± 3 cm)"),
+    ]
+    cols = {c: figures(c) for c in cfgs}
+    label = {"full": "full system (formation control)", "free": "free dance"}
     w("## Targets (issue 43: the group model out of its collapse)")
     w("")
-    w("| target | full system | bound | verdict |")
-    w("|---|---|---|---|")
-    for r in rows:
-        w("| " + " | ".join(r) + " |")
+    w("| target | bound | " + " | ".join(label[c] for c in cfgs) + " |")
+    w("|---|---|" + "---|" * len(cfgs))
+    for k, (name, bound) in enumerate(names):
+        w(f"| {name} | {bound} | " + " | ".join(cols[c][k] for c in cfgs) + " |")
     w("")
     w("Physical bounds are the held-out real solo tracks' mean over their clips (the last row of "
-      "the physical table); the figure is the worst single dancer over every clip and seed. The "
-      "largest root step here is over these 10 s clips; the 90 s songs with 2 to 5 dancers are "
-      "`cargo test -p dancegen-generate --test group_root_steps`.")
+      "the physical table; the floor: their range); each figure is the worst single dancer over "
+      "every clip and seed. The largest root step here is over these 10 s clips; the 90 s songs "
+      "with 2 to 5 dancers are `cargo test -p dancegen-generate --test group_root_steps`.")
     w("")
 
 
