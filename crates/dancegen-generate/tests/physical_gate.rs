@@ -242,11 +242,9 @@ fn holistic_soulnet_small_is_plausible() {
     gate("soulnet-small", &real, &dancers);
 }
 
-#[test]
-#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small still stands stiff with crossed \
-            shins; run with --ignored to see its figures"]
-fn group_tcdiffpp_small_is_plausible() {
-    let real = real(
+/// Every real take the group data set is composed from (configs/tcdiffpp_small.toml).
+fn real_group() -> Vec<TakeFigures> {
+    real(
         &[
             "cmu-salsa",
             "aistpp/motions",
@@ -255,7 +253,39 @@ fn group_tcdiffpp_small_is_plausible() {
             "cmu-dance/whirl",
         ],
         None,
+    )
+}
+
+fn group_gate(n: usize) {
+    let dancers = generate(SystemRequest::Group(GroupOptions::new(n)), None, 0);
+    assert_eq!(dancers.len(), n);
+    gate(
+        &format!("tcdiffpp-small ({n} dancers)"),
+        &real_group(),
+        &dancers,
     );
-    let dancers = generate(SystemRequest::Group(GroupOptions::new(3)), None, 0);
-    gate("tcdiffpp-small", &real, &dancers);
+}
+
+#[test]
+#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 2 dancers, is not plausible yet: \
+            jerk 1,650 against at most 1,589, no steps (step rate 0); run with --ignored to see \
+            its figures"]
+fn group_tcdiffpp_small_is_plausible_for_2_dancers() {
+    group_gate(2);
+}
+
+#[test]
+#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 3 dancers, is not plausible yet: \
+            shins crossed in 100 % of frames against at most 16 %, no steps; run with --ignored \
+            to see its figures"]
+fn group_tcdiffpp_small_is_plausible_for_3_dancers() {
+    group_gate(3);
+}
+
+#[test]
+#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 5 dancers, is not plausible yet: \
+            shins crossed in 100 % of frames, jerk 1,980-3,370, no steps; run with --ignored to \
+            see its figures"]
+fn group_tcdiffpp_small_is_plausible_for_5_dancers() {
+    group_gate(5);
 }
