@@ -58,6 +58,15 @@ if [ ! -d "$browser/node_modules/puppeteer-core" ] ||
   echo "tools/test.sh: installing the browser test's npm packages ($browser)" >&2
   npm ci --prefix "$browser" --no-audit --no-fund --silent
 fi
+# A cold test build takes about 30 GB in cargo's target directory; say so up front instead of
+# failing halfway with "No space left on device" (as a CI run on a full disk once did).
+target_dir=${CARGO_TARGET_DIR:-target}
+mkdir -p "$target_dir"
+free_gb=$(df -Pk "$target_dir" | awk 'NR == 2 { print int($4 / 1048576) }')
+if [ "${free_gb:-0}" -lt 20 ]; then
+  echo "tools/test.sh: warning: only ${free_gb} GB free for $target_dir; a cold test build" \
+    "needs about 30 GB" >&2
+fi
 # Installed above, so the Blender test must run (without this it skips where Blender is absent).
 export DANCEGEN_REQUIRE_BLENDER=1
 exec cargo test --workspace --locked "$@"
