@@ -51,9 +51,11 @@ pub enum LoadedMotion {
     Group(Vec<SmplMotion>),
     /// A BVH with its own skeleton, in the file's units.
     Bvh(Bvh),
-    /// World joint positions only, `(T, J, 3)`.
+    /// World joint positions only: `(T, J, 3)`, or `(N, T, J, 3)` for `dancers = N > 1` (the
+    /// `.npy` that `generate --dancers N` writes), dancer after dancer.
     Joints {
         fps: f32,
+        dancers: usize,
         joints: usize,
         positions: Vec<f32>,
     },
@@ -218,22 +220,34 @@ fn load_npy(path: &Path) -> Result<LoadedMotion, FormatError> {
             .and_then(|m| m.to_smpl24())
             .map(LoadedMotion::Smpl)
             .map_err(|e| err(path, e)),
-        [t, j, 3] if *t > 0 && *j > 0 => {
-            let positions: Vec<f32> = a.data.iter().map(|&v| v as f32).collect();
-            if positions.iter().any(|v| !v.is_finite()) {
-                return Err(err(path, "joint positions contain NaN or infinity"));
-            }
-            Ok(LoadedMotion::Joints {
-                fps: NPY_DEFAULT_FPS,
-                joints: *j,
-                positions,
-            })
-        }
+        [t, j, 3] if *t > 0 && *j > 0 => joints_npy(path, &a.data, 1, *j),
+        [n, t, j, 3] if *n > 0 && *t > 0 && *j > 0 => joints_npy(path, &a.data, *n, *j),
         shape => Err(err(
             path,
-            format!("array of shape {shape:?} is neither FineDance (T, 315) nor joints (T, J, 3)"),
+            format!(
+                "array of shape {shape:?} is neither FineDance (T, 315), joints (T, J, 3) nor a \
+                 group's joints (N, T, J, 3)"
+            ),
         )),
     }
+}
+
+fn joints_npy(
+    path: &Path,
+    data: &[f64],
+    dancers: usize,
+    joints: usize,
+) -> Result<LoadedMotion, FormatError> {
+    let positions: Vec<f32> = data.iter().map(|&v| v as f32).collect();
+    if positions.iter().any(|v| !v.is_finite()) {
+        return Err(err(path, "joint positions contain NaN or infinity"));
+    }
+    Ok(LoadedMotion::Joints {
+        fps: NPY_DEFAULT_FPS,
+        dancers,
+        joints,
+        positions,
+    })
 }
 
 /// Options of [`convert_motion`].
@@ -326,6 +340,29 @@ pub fn convert_motion(
                     .ok_or_else(|| err(path, format!("--dancer {d}: the file has {n} dancers")))?,
             )
         }
+        (
+            LoadedMotion::Joints {
+                fps,
+                dancers,
+                joints,
+                positions,
+            },
+            Some(d),
+        ) if dancers > 1 => {
+            if d >= dancers {
+                return Err(err(
+                    path,
+                    format!("--dancer {d}: the file has {dancers} dancers"),
+                ));
+            }
+            let per = positions.len() / dancers;
+            LoadedMotion::Joints {
+                fps,
+                dancers: 1,
+                joints,
+                positions: positions[d * per..(d + 1) * per].to_vec(),
+            }
+        }
         (m, _) => m,
     };
     let Some(fps) = opts.fps else {
@@ -342,12 +379,17 @@ pub fn convert_motion(
         LoadedMotion::Bvh(b) => LoadedMotion::Bvh(bvh_stride(path, b, fps)?),
         LoadedMotion::Joints {
             fps: src,
+            dancers,
             joints,
             positions,
         } => LoadedMotion::Joints {
             fps,
+            dancers,
             joints,
-            positions: resample_linear(&positions, joints * 3, src, fps),
+            positions: positions
+                .chunks(positions.len() / dancers.max(1))
+                .flat_map(|one| resample_linear(one, joints * 3, src, fps))
+                .collect(),
         },
     })
 }
@@ -469,11 +511,19 @@ pub fn joint_positions(
             Ok((vec![t, j, 3], p.into_iter().map(|v| v as f32).collect()))
         }
         LoadedMotion::Joints {
-            joints, positions, ..
-        } => Ok((
-            vec![positions.len() / (joints * 3), *joints, 3],
-            positions.clone(),
-        )),
+            dancers,
+            joints,
+            positions,
+            ..
+        } => {
+            let frames = positions.len() / (dancers * joints * 3).max(1);
+            let shape = if *dancers > 1 {
+                vec![*dancers, frames, *joints, 3]
+            } else {
+                vec![frames, *joints, 3]
+            };
+            Ok((shape, positions.clone()))
+        }
     }
 }
 

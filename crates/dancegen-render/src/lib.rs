@@ -95,11 +95,16 @@ pub fn tracks_from_motion(path: &Path, m: &LoadedMotion) -> Result<Vec<DancerTra
             parents: b.joints.iter().map(|j| j.parent).collect(),
             fps,
         }],
-        LoadedMotion::Joints { joints, .. } => vec![DancerTrack {
-            joints: data,
-            parents: vec![None; *joints],
-            fps,
-        }],
+        LoadedMotion::Joints {
+            dancers, joints, ..
+        } => data
+            .chunks((data.len() / dancers.max(&1)).max(1))
+            .map(|c| DancerTrack {
+                joints: c.to_vec(),
+                parents: vec![None; *joints],
+                fps,
+            })
+            .collect(),
     };
     Ok(tracks)
 }
@@ -188,6 +193,25 @@ mod tests {
     fn save(name: &str, img: &RgbImage) {
         if let Some(dir) = std::env::var_os("DANCEGEN_RENDER_TEST_OUT") {
             write::write_png(&std::path::Path::new(&dir).join(name), img).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_group_joints_file_gives_one_track_per_dancer() {
+        // generate --dancers 3 -o x.npy: (3, T, 24, 3), dancer after dancer.
+        let (n, t) = (3, 4);
+        let positions: Vec<f32> = (0..n * t * 24 * 3).map(|i| i as f32).collect();
+        let m = LoadedMotion::Joints {
+            fps: 30.0,
+            dancers: n,
+            joints: 24,
+            positions: positions.clone(),
+        };
+        let tracks = tracks_from_motion(std::path::Path::new("x.npy"), &m).unwrap();
+        assert_eq!(tracks.len(), n);
+        let per = t * 24 * 3;
+        for (d, tr) in tracks.iter().enumerate() {
+            assert_eq!(tr.joints, positions[d * per..(d + 1) * per]);
         }
     }
 
