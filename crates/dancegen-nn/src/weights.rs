@@ -124,6 +124,51 @@ pub fn load<M: Module + ModuleSnapshot>(
     Ok(model)
 }
 
+/// What a warm start ([`load_warm`]) took from its file and what it left.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WarmStart {
+    /// The model's tensors the file did not have: they keep their fresh initialisation.
+    pub fresh: Vec<String>,
+    /// The file's tensors the model does not have: ignored.
+    pub unused: Vec<String>,
+}
+
+/// Loads what `path` has of `model` (a training run started from another run's weights, whose
+/// architecture may add or drop modules): tensors of the same name and shape are taken, the
+/// rest keep `model`'s initialisation and are listed. A tensor of the same name and another
+/// shape is an error, as in [`load`].
+pub fn load_warm<M: Module + ModuleSnapshot>(
+    mut model: M,
+    path: &Path,
+) -> Result<(M, WarmStart), WeightsError> {
+    if !path.is_file() {
+        return Err(WeightsError::Read {
+            path: path.to_path_buf(),
+            reason: "no such file".into(),
+        });
+    }
+    let mut store = SafetensorsStore::from_file(path)
+        .allow_partial(true)
+        .with_from_adapter(FloatCastAdapter::to(DType::F32));
+    let result = model
+        .load_from(&mut store)
+        .map_err(|e| WeightsError::Read {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+    if !result.errors.is_empty() {
+        return Err(WeightsError::Mismatch {
+            path: path.to_path_buf(),
+            problems: result.errors.iter().map(|e| format!("{e}")).collect(),
+        });
+    }
+    let mut fresh: Vec<String> = result.missing.iter().map(|(p, _)| p.clone()).collect();
+    let mut unused = result.unused.clone();
+    fresh.sort();
+    unused.sort();
+    Ok((model, WarmStart { fresh, unused }))
+}
+
 /// Tensor names are sorted, so a message is the same from run to run.
 fn check(r: &ApplyResult, path: &Path) -> Result<(), WeightsError> {
     let path = path.to_path_buf();
@@ -260,5 +305,42 @@ mod tests {
         // F32 files still load bit-exactly.
         let exact = load(net(1.0), &full, Layout::Burn).unwrap();
         assert_eq!(values(exact.linear.weight.val().reshape([64 * 64])), b);
+    }
+
+    #[derive(Module, Debug)]
+    struct Grown {
+        linear: Linear,
+        extra: Linear,
+    }
+
+    #[test]
+    fn a_warm_start_takes_what_fits_and_lists_the_rest() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("old.safetensors");
+        let old = net(0.0);
+        save(&old, &file, Layout::Burn, &[]).unwrap();
+        let device = crate::device::inference();
+        let grown = Grown {
+            linear: LinearConfig::new(64, 64).init(&device),
+            extra: LinearConfig::new(4, 2).init(&device),
+        };
+        let extra_before = values(grown.extra.weight.val().reshape([8]));
+        let (warm, report) = load_warm(grown, &file).unwrap();
+        assert_eq!(
+            values(warm.linear.weight.val().reshape([64 * 64])),
+            values(old.linear.weight.val().reshape([64 * 64]))
+        );
+        assert_eq!(values(warm.extra.weight.val().reshape([8])), extra_before);
+        assert_eq!(report.fresh, vec!["extra.bias", "extra.weight"]);
+        assert_eq!(report.unused, vec!["stats"]);
+
+        // Same name, another shape: refused, naming the tensor.
+        let wrong = Grown {
+            linear: LinearConfig::new(64, 32).init(&device),
+            extra: LinearConfig::new(4, 2).init(&device),
+        };
+        let err = load_warm(wrong, &file).unwrap_err().to_string();
+        assert!(err.contains("linear.weight"), "{err}");
+        assert!(load_warm(net(0.0), &dir.path().join("none")).is_err());
     }
 }

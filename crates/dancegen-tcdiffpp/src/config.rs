@@ -56,6 +56,11 @@ pub struct DenoiserConfig {
     /// replacing adaptor of the small model learns one crossed-shin pose and holds it
     /// whatever the decoder says (docs/group-collapse.md, "The footwork adaptor").
     pub footwork_residual: bool,
+    /// Our option, not the paper's: each dancer's root x/y is integrated from per-frame steps
+    /// and placed at the window mean of the decoder's root output ([`crate::root_path`]), so
+    /// the noise the decoder reads cannot make the root jump between frames
+    /// (docs/group-collapse.md §11).
+    pub root_integrated: bool,
 }
 
 impl Default for DenoiserConfig {
@@ -76,6 +81,7 @@ impl Default for DenoiserConfig {
             footwork: true,
             footwork_hidden: 128,
             footwork_residual: false,
+            root_integrated: false,
         }
     }
 }

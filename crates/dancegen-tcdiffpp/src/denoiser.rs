@@ -43,6 +43,7 @@ use crate::cross_mamba::CrossMambaLayer;
 use crate::footwork::FootworkAdaptor;
 use crate::fusion::FusionProjection;
 use crate::layout::{N_MAX, from_tokens, to_tokens, token_mask, token_padding};
+use crate::root_path::RootPath;
 use crate::swap::SwapEmbedding;
 use dancegen_nn::host_linear;
 
@@ -92,6 +93,8 @@ pub struct GroupDenoiser {
     pub ssm_layers: Vec<CrossMambaLayer>,
     pub output: Linear,
     pub footwork: Option<FootworkAdaptor>,
+    /// The integrated root path ([`DenoiserConfig::root_integrated`]).
+    pub root_path: Option<RootPath>,
     /// The normaliser the model was trained with (one per-dancer EDGE-151 normaliser).
     pub denorm: Denormalize,
     #[module(skip)]
@@ -143,6 +146,7 @@ impl DenoiserConfig {
             footwork: self.footwork.then(|| {
                 FootworkAdaptor::new(self.footwork_hidden, self.footwork_residual, device)
             }),
+            root_path: self.root_integrated.then(|| RootPath::new(d, device)),
             denorm: Denormalize::from_mean_std(mean, std, device),
             d_model: d,
             positioning: self.positioning,
@@ -271,7 +275,11 @@ impl GroupDenoiser {
         for l in &self.ssm_layers {
             h = l.forward(h, &ctx) * mask.clone();
         }
-        let raw = host_linear::forward(&self.output, h);
+        let raw = host_linear::forward(&self.output, h.clone());
+        let raw = match &self.root_path {
+            Some(r) => r.forward(raw, h),
+            None => raw,
+        };
         let out = match &self.footwork {
             Some(fa) => fa.forward(raw),
             None => raw,

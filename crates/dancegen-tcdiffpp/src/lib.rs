@@ -9,7 +9,8 @@
 //!   empty slots are masked.
 //! - [`denoiser`]: the Group Dance Decoder (input projection + dancer positioning embedding,
 //!   [`fusion`] projection, FiLM transformer or [`cross_mamba`] sequence decoder layers,
-//!   [`swap`] mode as FiLM input and memory token) followed by the [`footwork`] adaptor.
+//!   [`swap`] mode as FiLM input and memory token) followed by the [`footwork`] adaptor;
+//!   optionally (ours) the root integrated from per-frame steps, [`root_path`].
 //! - [`losses`]: EDGE's terms plus the pairwise distance-consistency loss (paper Eq. 16–17).
 //! - [`sampler`]: long group diffusion sampling (LGDS, keeping window 0) and the parallel
 //!   EDGE-style long-form sampler, both with formation control by clean root injection.
@@ -25,6 +26,7 @@ pub mod footwork;
 pub mod fusion;
 pub mod layout;
 pub mod losses;
+pub mod root_path;
 pub mod sampler;
 pub mod swap;
 pub mod window;

@@ -6,8 +6,11 @@
 //! frame-0 centroid, normalised with the statistics the model carries) and gets its swap code,
 //! then [`dancegen_tcdiffpp::losses::group_loss`] gives the objective.
 
+use std::path::{Path, PathBuf};
+
 use dancegen_nn::burn::tensor::{Device, Tensor, TensorData};
 use dancegen_nn::diffusion::Schedule;
+use dancegen_nn::weights;
 use dancegen_tcdiffpp::config::GroupModelConfig;
 use dancegen_tcdiffpp::denoiser::{GroupDenoiser, MUSIC_DIMS};
 use dancegen_tcdiffpp::layout::GROUP_DIMS;
@@ -25,7 +28,19 @@ pub const KIND: &str = "tcdiffpp_group";
 pub struct GroupTask {
     pub config: GroupModelConfig,
     schedule: Schedule,
+    /// `[model] init_from`: a run's weights (a `model.safetensors`, or a run or checkpoint
+    /// folder holding one) to start from. Tensors of the same name and shape are taken; the
+    /// modules this architecture adds keep their fresh initialisation (a warm start, e.g. the
+    /// integrated root added to a trained network).
+    pub init_from: Option<PathBuf>,
+    /// `[model] init_fresh`: modules of [`FRESH_MODULES`] that start fresh even where
+    /// `init_from` has them (e.g. a footwork adaptor trained to replace the lower body, when
+    /// this run's adds to it).
+    pub init_fresh: Vec<String>,
 }
+
+/// The modules `[model] init_fresh` may name.
+pub const FRESH_MODULES: [&str; 4] = ["footwork", "fusion", "output", "root_path"];
 
 impl GroupTask {
     pub fn from_config(config: &TrainConfig) -> Result<Self, String> {
@@ -42,7 +57,30 @@ impl GroupTask {
             }
             None => return Err("[data.music] is required".into()),
         }
-        let cfg: GroupModelConfig = toml::Value::Table(config.model_params())
+        let mut params = config.model_params();
+        let init_from = match params.remove("init_from") {
+            None => None,
+            Some(toml::Value::String(p)) => Some(weights_file(Path::new(&p))),
+            Some(v) => return Err(format!("[model] init_from must be a path, not {v}")),
+        };
+        let init_fresh = match params.remove("init_fresh") {
+            None => Vec::new(),
+            Some(toml::Value::Array(names)) => names
+                .into_iter()
+                .map(|n| match n {
+                    toml::Value::String(n) if FRESH_MODULES.contains(&n.as_str()) => Ok(n),
+                    other => Err(format!(
+                        "[model] init_fresh: {other} is not one of {}",
+                        FRESH_MODULES.join(", ")
+                    )),
+                })
+                .collect::<Result<_, _>>()?,
+            Some(v) => return Err(format!("[model] init_fresh must be a list, not {v}")),
+        };
+        if !init_fresh.is_empty() && init_from.is_none() {
+            return Err("[model] init_fresh needs init_from".into());
+        }
+        let cfg: GroupModelConfig = toml::Value::Table(params)
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
         if config.data.window != cfg.window() {
@@ -55,7 +93,18 @@ impl GroupTask {
         Ok(Self {
             config: cfg,
             schedule: Schedule::edge(),
+            init_from,
+            init_fresh,
         })
+    }
+}
+
+/// `p` itself, or the weights file in the run or checkpoint folder `p`.
+fn weights_file(p: &Path) -> PathBuf {
+    if p.is_dir() {
+        p.join(crate::files::WEIGHTS)
+    } else {
+        p.to_path_buf()
     }
 }
 
@@ -84,9 +133,62 @@ impl TrainTask for GroupTask {
         self.config.denoiser.init(&m, &s, device)
     }
 
+    fn check_data(&self, normalizer: &Normalizer) -> Result<(), String> {
+        let Some(from) = &self.init_from else {
+            return Ok(());
+        };
+        let (m, s) = stats(normalizer);
+        let dev = dancegen_nn::device::inference();
+        let (net, _) = weights::load_warm(self.config.denoiser.init(&m, &s, &dev), from)
+            .map_err(|e| format!("[model] init_from: {e}"))?;
+        let fresh = self.config.denoiser.init(&m, &s, &dev);
+        let (theirs, ours) = (net.denorm.host(), fresh.denorm.host());
+        let close = |a: &[f32], b: &[f32]| {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()))
+        };
+        if !(close(&theirs.0, &ours.0) && close(&theirs.1, &ours.1)) {
+            return Err(format!(
+                "[model] init_from: {} was trained with another normaliser than this run's data \
+                 gives (rebuild the same data set, or train from scratch)",
+                from.display()
+            ));
+        }
+        Ok(())
+    }
+
     fn init_with_data(&self, device: &Device, normalizer: &Normalizer) -> GroupDenoiser {
         let (m, s) = stats(normalizer);
-        self.config.denoiser.init(&m, &s, device)
+        let fresh = self.config.denoiser.init(&m, &s, device);
+        let Some(from) = &self.init_from else {
+            return fresh;
+        };
+        // Checked by `check_data` before this is called.
+        let (mut net, report) = weights::load_warm(fresh.clone(), from)
+            .unwrap_or_else(|e| panic!("[model] init_from: {e}"));
+        for name in &self.init_fresh {
+            match name.as_str() {
+                "footwork" => net.footwork = fresh.footwork.clone(),
+                "fusion" => net.fusion = fresh.fusion.clone(),
+                "output" => net.output = fresh.output.clone(),
+                "root_path" => net.root_path = fresh.root_path.clone(),
+                other => unreachable!("{other} was checked against FRESH_MODULES"),
+            }
+        }
+        eprintln!(
+            "init_from {}: fresh {:?}{}, ignored {:?}",
+            from.display(),
+            report.fresh,
+            if self.init_fresh.is_empty() {
+                String::new()
+            } else {
+                format!(" and the modules {:?}", self.init_fresh)
+            },
+            report.unused
+        );
+        net
     }
 
     fn loss(&self, model: &GroupDenoiser, batch: &Batch) -> Losses {
