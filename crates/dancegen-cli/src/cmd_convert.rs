@@ -20,6 +20,7 @@ pub fn run(args: &ConvertArgs, quiet: bool) -> Result<()> {
             NpzStyleArg::Edge => NpzStyle::Edge,
         },
         rig: args.rig,
+        npz_record: None,
     };
     let pb = spinner(&format!("converting {}", args.input.display()), quiet);
     let read = LoadOptions {

@@ -5,6 +5,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
+use dancegen_generate::edit::{Edit, GivenMotion};
+use dancegen_generate::record::DanceRecord;
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader_at};
 use dancegen_generate::systems::group::{GroupOptions, LongSampler};
@@ -50,10 +52,24 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
 
 /// The library request the flags describe (also each line of `dancegen batch`).
 pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
-    let system = match (args.system.as_deref(), &args.leader) {
-        (None, None) => "solo",
-        (None, Some(_)) => "duet",
-        (Some(s), _) => s,
+    let edited = edited_dance(args)?;
+    let edit_name = args
+        .edit
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
+    let recorded = edited.as_ref().and_then(|e| e.record.as_ref());
+    let system = match (args.system.as_deref(), &args.leader, recorded) {
+        (Some(s), _, Some(r)) if s != r.system => bail!(
+            "--edit {}: a {} dance; it is edited with --system {} (or without --system)",
+            edit_name,
+            r.system,
+            r.system
+        ),
+        (None, None, Some(r)) => r.system.as_str(),
+        (None, None, None) => "solo",
+        (None, Some(_), _) => "duet",
+        (Some(s), _, _) => s,
     };
     let info = systems::by_name(system).map_err(anyhow::Error::msg)?;
     let system = match (info.name, &args.leader) {
@@ -115,18 +131,55 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
     } else {
         DancerSelection::Auto
     };
+    let song = match (&args.song, recorded) {
+        (Some(p), _) => Song::File(p.clone()),
+        (None, Some(r)) => match r.song_path() {
+            Some(p) if !p.is_file() => bail!(
+                "--edit {}: its song {} is not there any more; give the song file as SONG",
+                edit_name,
+                p.display()
+            ),
+            p => Song::file_or_demo(p.as_deref()),
+        },
+        (None, None) if edited.is_some() => bail!(
+            "--edit {}: it has no dancegen record (a foreign dance), so give the SONG it dances \
+             to (and --start if it does not start at the song's start)",
+            edit_name
+        ),
+        (None, None) => Song::Demo,
+    };
+    // A recorded model folder is used when it is still there; otherwise the default one.
+    let model = args.model.clone().or_else(|| {
+        recorded
+            .map(|r| PathBuf::from(&r.model))
+            .filter(|d| d.join("model.toml").is_file())
+    });
+    let continue_from = match &args.continue_from {
+        Some(p) => Some(GivenMotion::load(
+            p,
+            "the motion to continue",
+            None,
+            "convert it first: dancegen convert FILE --source-fps N -o motion.npz",
+        )?),
+        None => None,
+    };
     Ok(Request {
-        song: Song::file_or_demo(args.song.as_deref()),
+        song,
         system,
         common: CommonOptions {
-            seed: args.seed,
+            seed: args.seed.or(recorded.map(|r| r.seed)).unwrap_or(0),
             steps: args.steps,
             guidance: args.guidance,
             genre: args.genre.clone(),
-            start: args.start,
+            start: args.start.or(recorded.map(|r| r.start_s)),
             end: args.end,
+            edit: Edit {
+                base: edited.map(|e| e.dance),
+                regenerate: args.regenerate.clone(),
+                continue_from,
+            },
         },
-        model: args.model.clone(),
+        model,
         outputs: outputs
             .into_iter()
             .map(|path| OutputRequest {
@@ -187,6 +240,38 @@ fn group_options(args: &GenerateArgs) -> Result<GroupOptions> {
         o = o.with_formation_file(f)?;
     }
     Ok(o)
+}
+
+/// The `--edit` dance and its record (`None` for a foreign dance).
+struct EditedDance {
+    dance: GivenMotion,
+    record: Option<DanceRecord>,
+}
+
+fn edited_dance(args: &GenerateArgs) -> Result<Option<EditedDance>> {
+    let Some(path) = &args.edit else {
+        return Ok(None);
+    };
+    let record = DanceRecord::read(path)?;
+    if let Some(r) = &record
+        && r.dancers > 1
+    {
+        bail!(
+            "--edit {}: dancer {} of a {}-dancer {} dance; editing one dancer of several is not \
+             supported yet",
+            path.display(),
+            r.dancer,
+            r.dancers,
+            r.system
+        );
+    }
+    let dance = GivenMotion::load(
+        path,
+        "the dance to edit",
+        None,
+        "convert it first: dancegen convert FILE --source-fps N -o dance.npz",
+    )?;
+    Ok(Some(EditedDance { dance, record }))
 }
 
 fn duet_options(args: &GenerateArgs, leader: &std::path::Path) -> Result<DuetOptions> {

@@ -262,6 +262,9 @@ pub struct ConvertOptions {
     pub dancer: Option<usize>,
     /// Style of `.npz` output.
     pub npz_style: NpzStyle,
+    /// Text stored in an AMASS-style `.npz` as its
+    /// [`crate::smpl_npz::RECORD_MEMBER`] (what made the dance, for `generate --edit`).
+    pub npz_record: Option<String>,
     /// Bone names of `.bvh`, `.glb` and `.fbx` output ([`Rig`]; joint positions do not change).
     /// `.npy`, `.npz` and `.json` keep SMPL's order and names, which research tools expect.
     pub rig: Rig,
@@ -569,9 +572,12 @@ pub fn save_motion_file(
         "npz" => {
             let s = single(out, m)?;
             let r = match opts.npz_style {
-                NpzStyle::Amass => {
-                    crate::smpl_npz::write_smpl_npz(out, s, &SmplNpzOptions::default())
-                }
+                NpzStyle::Amass => crate::smpl_npz::write_smpl_npz_recorded(
+                    out,
+                    s,
+                    &SmplNpzOptions::default(),
+                    opts.npz_record.as_deref(),
+                ),
                 NpzStyle::Edge => {
                     crate::smpl_npz::write_edge_npz(out, s, &SmplNpzOptions::default())
                 }

@@ -291,8 +291,30 @@ fn amass_frame(aa: &[f32], pelvis: &[f32], opts: &SmplNpzOptions) -> ([f64; 3], 
 /// SMPL `transl` (pelvis − `J0`, in the `opts.up` frame), `betas` zeros(10),
 /// `mocap_framerate` scalar.
 pub fn write_smpl_npz(path: &Path, m: &SmplMotion, opts: &SmplNpzOptions) -> Result<(), ReprError> {
+    write_smpl_npz_recorded(path, m, opts, None)
+}
+
+/// The member that holds what made a dance ([`write_smpl_npz_recorded`]): one unicode string,
+/// which numpy reads as `np.load(f)["dancegen"].item()` and other readers ignore.
+pub const RECORD_MEMBER: &str = "dancegen";
+
+/// [`write_smpl_npz`] plus, when given, `record` (text, e.g. JSON) as [`RECORD_MEMBER`].
+pub fn write_smpl_npz_recorded(
+    path: &Path,
+    m: &SmplMotion,
+    opts: &SmplNpzOptions,
+    record: Option<&str>,
+) -> Result<(), ReprError> {
     m.validate()?;
-    write_amass(path, &m.poses, POSE_DIMS, &m.trans, m.fps, None, opts)
+    write_amass(
+        path, &m.poses, POSE_DIMS, &m.trans, m.fps, None, record, opts,
+    )
+}
+
+/// The [`RECORD_MEMBER`] of an `.npz`, `None` when the file has none.
+pub fn read_record(path: &Path) -> Result<Option<String>, ReprError> {
+    dancegen_io::npz::read_npz_text(path, RECORD_MEMBER)
+        .map_err(|e| ReprError::Invalid(e.to_string()))
 }
 
 /// Writes an AMASS-style SMPL-H `.npz`, the keys of AMASS's SMPL-H release (float64):
@@ -324,11 +346,21 @@ pub fn write_smplh_npz(
     if !(fps.is_finite() && fps > 0.0) {
         return Err(ReprError::Invalid(format!("fps {fps} is not positive")));
     }
-    write_amass(path, poses, width, trans, fps, Some(WRITTEN_GENDER), opts)
+    write_amass(
+        path,
+        poses,
+        width,
+        trans,
+        fps,
+        Some(WRITTEN_GENDER),
+        None,
+        opts,
+    )
 }
 
 /// The AMASS-style writer behind [`write_smpl_npz`] and [`write_smplh_npz`]: `poses` is
 /// `(T, width)` with the root first, `trans` the `(T, 3)` pelvis, shapes already checked.
+#[allow(clippy::too_many_arguments)]
 fn write_amass(
     path: &Path,
     poses: &[f32],
@@ -336,6 +368,7 @@ fn write_amass(
     trans: &[f32],
     fps: f32,
     gender: Option<&str>,
+    record: Option<&str>,
     opts: &SmplNpzOptions,
 ) -> Result<(), ReprError> {
     let t = trans.len() / 3;
@@ -358,6 +391,9 @@ fn write_amass(
         members.push(("gender", &[], NpyData::Str(g)));
     }
     members.push(("mocap_framerate", &[], NpyData::F64(&fps)));
+    if let Some(r) = record {
+        members.push((RECORD_MEMBER, &[], NpyData::Str(r)));
+    }
     write_npz(path, &members)?;
     Ok(())
 }

@@ -12,7 +12,8 @@ use crate::error::GenerateError;
 use crate::models::ModelLocator;
 use crate::output;
 use crate::progress::{CancelToken, Progress, Tracker, stage};
-use crate::request::{Request, SystemRequest};
+use crate::record::DanceRecord;
+use crate::request::{Request, Song, SystemRequest};
 use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer};
 use crate::systems::duet::Duet;
@@ -142,6 +143,20 @@ impl Generator {
         cancel: &CancelToken,
     ) -> Result<Generated, GenerateError> {
         let started = Instant::now();
+        if let Some(op) = request
+            .common
+            .edit
+            .operations()
+            .into_iter()
+            .find(|op| !S::EDITS.contains(op))
+        {
+            return Err(GenerateError::Invalid(format!(
+                "{op} is not supported by --system {} (see the table of edits in `dancegen \
+                 generate --help`)",
+                S::NAME
+            )));
+        }
+        request.common.edit.check()?;
         let planned = output::plan(&request.outputs, request.system.makes_face())?;
         let model_dir = match &request.model {
             Some(d) => d.clone(),
@@ -188,7 +203,22 @@ impl Generator {
 
         tracker.begin(stage::WRITE_OUTPUTS)?;
         let t = Instant::now();
-        let written = output::write_all(&planned, &dance, &song, &tracker)?;
+        let record = DanceRecord {
+            song: recorded_song(&request.song),
+            start_s: dance.span.start_s,
+            end_s: dance.span.end_s,
+            system: S::NAME.into(),
+            model: std::path::absolute(&model_dir)
+                .unwrap_or_else(|_| model_dir.clone())
+                .display()
+                .to_string(),
+            seed: request.common.seed,
+            dancers: dance.dancers.len(),
+            dancer: 0,
+            fps: FPS,
+            version: env!("CARGO_PKG_VERSION").into(),
+        };
+        let written = output::write_all(&planned, &dance, &song, &record, &tracker)?;
         let write_outputs_s = t.elapsed().as_secs_f64();
         tracker.finish();
 
@@ -219,6 +249,18 @@ impl Generator {
             },
             written,
         })
+    }
+}
+
+/// How a job's song is recorded in its files ([`DanceRecord::song`]).
+fn recorded_song(song: &Song) -> String {
+    match song {
+        Song::Demo => crate::record::DEMO_SONG.into(),
+        Song::File(p) => std::path::absolute(p)
+            .unwrap_or_else(|_| p.clone())
+            .display()
+            .to_string(),
+        Song::Bytes { name, .. } => name.clone(),
     }
 }
 

@@ -29,11 +29,13 @@
 //! ```
 
 pub mod beat_align;
+pub mod edit;
 pub mod error;
 pub mod generator;
 pub mod models;
 pub mod output;
 pub mod progress;
+pub mod record;
 pub mod request;
 pub mod song;
 pub mod system;

@@ -19,6 +19,7 @@ use dancegen_render::{RenderOptions, Scene, tracks_from_motion, write};
 
 use crate::error::GenerateError;
 use crate::progress::{Tracker, stage};
+use crate::record::DanceRecord;
 use crate::request::{DancerSelection, OutputRequest};
 use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, GroupReport};
@@ -297,6 +298,7 @@ pub(crate) fn write_all(
     planned: &[PlannedOutput],
     dance: &Dance,
     song: &AnalysedSong,
+    record: &DanceRecord,
     tracker: &Tracker<'_>,
 ) -> Result<Vec<PathBuf>, GenerateError> {
     // Before any file is written: only a holistic dance has a face for `.csv`.
@@ -325,10 +327,14 @@ pub(crate) fn write_all(
             for (k, d) in dance.dancers.iter().enumerate() {
                 let one = numbered(dest, k);
                 let tmp = staging.path_for(&one)?;
+                let record = DanceRecord {
+                    dancer: k,
+                    ..record.clone()
+                };
                 save_motion_file(
                     &tmp,
                     &LoadedMotion::Smpl(d.motion.clone()),
-                    &convert_options(&p.request),
+                    &convert_options(&p.request, &record),
                 )
                 .map_err(|e| about_dest(e, &tmp, &one))?;
             }
@@ -387,7 +393,11 @@ pub(crate) fn write_all(
             };
             written.map_err(|e| about_dest(e, &tmp, dest))?;
         } else {
-            save_motion_file(&tmp, &motion, &convert_options(&p.request))
+            let record = DanceRecord {
+                dancer: written_dancer(dance, p.request.dancers),
+                ..record.clone()
+            };
+            save_motion_file(&tmp, &motion, &convert_options(&p.request, &record))
                 .map_err(|e| about_dest(e, &tmp, dest))?;
         }
         done += n;
@@ -427,11 +437,21 @@ fn write_character(
 }
 
 /// How a motion file is written for `request`.
-fn convert_options(request: &OutputRequest) -> ConvertOptions {
+fn convert_options(request: &OutputRequest, record: &DanceRecord) -> ConvertOptions {
     ConvertOptions {
         rig: request.rig,
+        npz_record: Some(record.to_json()),
         ..ConvertOptions::default()
     }
+}
+
+/// The dancer a single-dancer file of `dance` holds under `selection` (as [`select`] picks it).
+fn written_dancer(dance: &Dance, selection: DancerSelection) -> usize {
+    let pick = match selection {
+        DancerSelection::Given => dance.dancers.iter().position(|d| !d.role.generated()),
+        _ => dance.dancers.iter().position(|d| d.role.generated()),
+    };
+    pick.unwrap_or(0)
 }
 
 /// `dir/stem_k.ext` for `dir/stem.ext`.

@@ -133,6 +133,35 @@ impl AnalysedSong {
         })
     }
 
+    /// The span of `frames` frames from `start` (an edited dance's own length), or an error
+    /// saying how much of the song there is.
+    pub fn span_of_frames(&self, start: Option<f64>, frames: usize) -> Result<Span, GenerateError> {
+        let start_s = start.unwrap_or(0.0);
+        let fps = f64::from(FPS);
+        if !(start_s.is_finite() && start_s >= 0.0) {
+            return Err(GenerateError::Invalid(format!(
+                "--start {start_s}: need a time in seconds from 0"
+            )));
+        }
+        let first_frame = (start_s * fps).round() as usize;
+        let end_frame = first_frame + frames;
+        if end_frame > self.frames() {
+            return Err(GenerateError::Invalid(format!(
+                "{}: {:.2} s of song from --start {start_s}, but the dance is {:.2} s long \
+                 (give the song and --start it was made for)",
+                self.label,
+                self.frames().saturating_sub(first_frame) as f64 / fps,
+                frames as f64 / fps
+            )));
+        }
+        Ok(Span {
+            start_s,
+            end_s: start_s + frames as f64 / fps,
+            first_frame,
+            end_frame,
+        })
+    }
+
     /// The features of `span`, `[frames, dim]` row-major.
     pub fn music(&self, span: &Span) -> &[f32] {
         let cols = self.features.features.cols;

@@ -23,6 +23,8 @@ pub struct CommonOptions {
     pub start: Option<f64>,
     /// End of the music to dance to (seconds).
     pub end: Option<f64>,
+    /// What to keep of existing motion (an edit); empty for a plain generation.
+    pub edit: crate::edit::Edit,
 }
 
 impl CommonOptions {
@@ -153,6 +155,9 @@ pub trait DanceSystem: 'static {
     /// The parts the system reports progress under (its sampler's [`StepHook`] part names)
     /// with their rough share of its running time.
     const PARTS: &'static [(&'static str, f64)];
+    /// The edit operations its sampler applies ([`crate::edit::Edit::operations`] names); a
+    /// request with another is refused before any work, naming it.
+    const EDITS: &'static [&'static str] = &[];
 
     type Model: Send + Sync + 'static;
     type Options;

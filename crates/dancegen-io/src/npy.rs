@@ -203,6 +203,58 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
     Ok(NpyArray { shape, data, dtype })
 }
 
+/// Longest string [`parse_npy_text`] reads, in characters: a record, not a data set.
+pub const NPY_TEXT_MAX_CHARS: usize = 1 << 16;
+
+/// Parses a 0-d unicode `.npy` stream (`<UN`, UTF-32LE code points, trailing NULs dropped as
+/// numpy drops them) into its string.
+pub fn parse_npy_text(bytes: &[u8]) -> Result<String, String> {
+    let rest = bytes
+        .strip_prefix(b"\x93NUMPY")
+        .ok_or("not a .npy file: no magic string")?;
+    let (major, rest) = match rest {
+        [major, _minor, rest @ ..] => (*major, rest),
+        _ => return Err("not a .npy file: truncated header".into()),
+    };
+    let (len, rest) = match (major, rest) {
+        (1, [a, b, rest @ ..]) => (usize::from(u16::from_le_bytes([*a, *b])), rest),
+        (2 | 3, [a, b, c, d, rest @ ..]) => (u32::from_le_bytes([*a, *b, *c, *d]) as usize, rest),
+        _ => return Err(format!("unsupported .npy version {major}")),
+    };
+    if len > rest.len() {
+        return Err("not a .npy file: header longer than the file".into());
+    }
+    let header = std::str::from_utf8(&rest[..len]).map_err(|_| "header is not text")?;
+    let data = &rest[len..];
+    let chars: usize = header
+        .split("'descr':")
+        .nth(1)
+        .and_then(|d| d.trim_start().strip_prefix("'<U"))
+        .and_then(|d| d.split('\'').next())
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(|| format!("not a unicode string array (header {})", header.trim()))?;
+    if !header.contains("'shape': ()") {
+        return Err(format!("not one string: header {}", header.trim()));
+    }
+    if chars > NPY_TEXT_MAX_CHARS {
+        return Err(format!(
+            "a string of {chars} characters, over the {NPY_TEXT_MAX_CHARS} read"
+        ));
+    }
+    if data.len() < 4 * chars {
+        return Err(format!(
+            "{} data bytes for a string of {chars} characters",
+            data.len()
+        ));
+    }
+    data[..4 * chars]
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .take_while(|&c| c != 0)
+        .map(|c| char::from_u32(c).ok_or_else(|| format!("{c:#x} is not a character")))
+        .collect()
+}
+
 /// Reorders a Fortran-order (column-major) buffer of `shape` to C order.
 pub fn fortran_to_c(data: &[f64], shape: &[usize]) -> Vec<f64> {
     let nd = shape.len();
@@ -278,6 +330,28 @@ mod tests {
         assert_eq!((buf.len() - 28) % 64, 0);
         assert_eq!(NpyData::Str("neutral").dtype(), "<U7");
         assert!(write_npy_data_to(&mut Vec::new(), &[2], NpyData::Str("x")).is_err());
+    }
+
+    #[test]
+    fn a_written_string_reads_back_and_bad_ones_are_refused() {
+        for text in ["neutral", "{\"song\": \"a é ♪.ogg\"}", ""] {
+            let mut buf = Vec::new();
+            write_npy_data_to(&mut buf, &[], NpyData::Str(text)).unwrap();
+            assert_eq!(parse_npy_text(&buf).unwrap(), text);
+        }
+        let mut numbers = Vec::new();
+        write_npy_f32_to(&mut numbers, &[2], &[1.0, 2.0]).unwrap();
+        assert!(
+            parse_npy_text(&numbers)
+                .unwrap_err()
+                .contains("not a unicode")
+        );
+        let mut short = Vec::new();
+        write_npy_data_to(&mut short, &[], NpyData::Str("neutral")).unwrap();
+        short.truncate(short.len() - 8);
+        assert!(parse_npy_text(&short).unwrap_err().contains("data bytes"));
+        assert!(parse_npy_text(b"\x93NUMPY\x01").is_err());
+        assert!(parse_npy_text(b"junk").is_err());
     }
 
     #[test]

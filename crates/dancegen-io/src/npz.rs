@@ -42,6 +42,32 @@ pub fn read_npz_with(
     wanted: Option<&[&str]>,
     max_total_bytes: u64,
 ) -> Result<Vec<(String, NpyArray)>, ReadError> {
+    let mut out = Vec::new();
+    each_member(path, wanted, max_total_bytes, |name, bytes| {
+        out.push((name, parse_npy(bytes)?));
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// The one string of the 0-d unicode member `name` (as [`crate::npy::NpyData::Str`] writes
+/// and `numpy.savez` stores a Python `str`), or `None` when the archive has no such member.
+pub fn read_npz_text(path: &Path, name: &str) -> Result<Option<String>, ReadError> {
+    let mut found = None;
+    each_member(path, Some(&[name]), NPZ_MAX_TOTAL_BYTES, |_, bytes| {
+        found = Some(crate::npy::parse_npy_text(bytes)?);
+        Ok(())
+    })?;
+    Ok(found)
+}
+
+/// Calls `f` with the name and bytes of every wanted `.npy` member, within the byte budget.
+fn each_member(
+    path: &Path,
+    wanted: Option<&[&str]>,
+    max_total_bytes: u64,
+    mut f: impl FnMut(String, &[u8]) -> Result<(), String>,
+) -> Result<(), ReadError> {
     let err = |reason: String| ReadError {
         path: path.to_path_buf(),
         reason,
@@ -50,7 +76,6 @@ pub fn read_npz_with(
     let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
         .map_err(|e| err(format!("not a .npz (zip) file: {e}")))?;
     let mut budget = max_total_bytes;
-    let mut out = Vec::new();
     for i in 0..zip.len() {
         let mut member = zip
             .by_index(i)
@@ -95,10 +120,9 @@ pub fn read_npz_with(
             )));
         }
         budget -= got;
-        let array = parse_npy(&bytes).map_err(merr)?;
-        out.push((name, array));
+        f(name, &bytes).map_err(merr)?;
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Writes a stored (uncompressed) `.npz` like `numpy.savez`: one `<name>.npy` member per entry

@@ -33,6 +33,7 @@ pub mod denoiser;
 pub mod discriminator;
 pub mod foot_refine;
 pub mod heading;
+pub mod inpaint;
 pub mod kinematics;
 pub mod layout;
 pub mod library;

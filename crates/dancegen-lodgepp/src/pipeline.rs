@@ -119,7 +119,7 @@ pub struct GeneratedDance {
 
 impl SoloModel {
     /// Normalised frames `[T, 151]` → raw, in place (window-relative root: no mean added).
-    fn to_raw(&self, frames: &mut [f32]) {
+    pub(crate) fn to_raw(&self, frames: &mut [f32]) {
         let (scale, shift) = self.pddm.denorm.host();
         for f in frames.chunks_mut(DIMS) {
             for c in 0..DIMS {
@@ -130,7 +130,7 @@ impl SoloModel {
 
     /// The denormaliser's `(scale, shift)` when the PDDM works in per-window heading frames
     /// (`crate::heading`), else `None`.
-    fn heading_stats(&self) -> Option<(Vec<f32>, Vec<f32>)> {
+    pub(crate) fn heading_stats(&self) -> Option<(Vec<f32>, Vec<f32>)> {
         self.config
             .pddm
             .pddm
@@ -138,7 +138,7 @@ impl SoloModel {
             .then(|| self.pddm.denorm.host())
     }
 
-    fn shift(&self) -> ResidualShift {
+    pub(crate) fn shift(&self) -> ResidualShift {
         self.config.pddm.shift.schedule()
     }
 
@@ -251,7 +251,7 @@ impl SoloModel {
 
     /// Music `[frames, 35]` cut into `count` windows of `n` frames starting every `advance`
     /// frames (the last frame repeated past the end).
-    fn music_windows(
+    pub(crate) fn music_windows(
         music: &[f32],
         frames: usize,
         n: usize,
@@ -268,7 +268,7 @@ impl SoloModel {
         out
     }
 
-    fn cond(
+    pub(crate) fn cond(
         &self,
         music: Vec<f32>,
         prims: &[WindowPrimitives],
@@ -291,7 +291,7 @@ impl SoloModel {
         }
     }
 
-    fn sample_opts(&self, opts: &GenerateOptions, seed: u64) -> PddmSampleOptions {
+    pub(crate) fn sample_opts(&self, opts: &GenerateOptions, seed: u64) -> PddmSampleOptions {
         PddmSampleOptions {
             steps: opts.steps,
             guidance: opts.guidance,
@@ -687,7 +687,7 @@ pub fn keep_on_stage(frames: &mut [f32], half: f32, sigma: f64) {
     }
 }
 
-fn host(x: Tensor<3>) -> Vec<f32> {
+pub(crate) fn host(x: Tensor<3>) -> Vec<f32> {
     x.into_data().convert::<f32>().try_to_vec::<f32>().unwrap()
 }
 

@@ -14,7 +14,7 @@
 //!   [`penetration`]: self-penetration of forearms/hands on a capsule body (our approximation
 //!   of Lodge++'s mesh-based ratio);
 //!   [`group`] (GMR, GMC, group MMC, TIF), [`duet`] (FID_cd, Div_cd, BED), [`longform`] (our
-//!   freezing and boundary-jerk measures); [`protocol`]: the papers' clip preparation;
+//!   freezing and boundary-jerk measures); [`edit`] (our figures of an edit's joins); [`protocol`]: the papers' clip preparation;
 //!   [`genre`]: a nearest-centroid genre classifier on kinetic features (our genre-control check);
 //!   [`posture`]: the share of upside-down frames (our check); [`physical`]: floor contact, foot
 //!   sliding, jerk, spikes, crossed shins and kinematic tempo (our plausibility figures).
@@ -75,6 +75,7 @@ use std::path::Path;
 pub mod bas;
 pub mod diversity;
 pub mod duet;
+pub mod edit;
 pub mod fid;
 pub mod foot_skating;
 pub mod foot_skating_duration;

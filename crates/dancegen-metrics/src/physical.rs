@@ -35,7 +35,7 @@ const L_KNEE: usize = 4;
 const R_KNEE: usize = 5;
 const PELVIS: usize = 0;
 /// Foot joints whose lowest point is "the foot" for the floor figures.
-const FOOT_JOINTS: [usize; 4] = [L_ANKLE, R_ANKLE, L_TOE, R_TOE];
+pub const FOOT_JOINTS: [usize; 4] = [L_ANKLE, R_ANKLE, L_TOE, R_TOE];
 
 /// Height above the floor within which a foot joint touches it: LODGE's toe contact height
 /// (`foot_skating.py`, 5 cm; `crate::foot_skating::TOE_CONTACT_HEIGHT`). The lowest foot joint of

@@ -189,6 +189,7 @@ fn generate(
                 genre: p.genre.clone(),
                 start: p.start,
                 end: p.end,
+                edit: Default::default(),
             },
             model: model.clone(),
             outputs,

@@ -310,7 +310,7 @@ mod tests {
         assert_eq!(e.args[e.args.len() - 2], "--");
         assert!(e.args.last().unwrap().ends_with("a.wav"));
         let g = parse_generate_args(&e.args).unwrap();
-        assert_eq!(g.seed, 7);
+        assert_eq!(g.seed, Some(7));
         assert!(g.no_foot_lock && !g.no_beat_align);
         assert_eq!(g.end, Some(8.5));
     }

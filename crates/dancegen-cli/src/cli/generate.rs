@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use dancegen_formats::rig::Rig;
 
-use super::value_parsers::{parse_rig, parse_source_fps};
+use super::value_parsers::{parse_range, parse_rig, parse_source_fps};
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SamplerArg {
@@ -76,6 +76,20 @@ pub struct GenerateArgs {
     /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
     /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
     /// which hold the follower.
+    /// Edit this dance: keep it, except the --regenerate ranges, which are made new to join
+    /// it. A .npz that dancegen wrote records its song, --start, system, model and seed, and
+    /// they are used unless given; any other motion `convert` reads needs SONG (and --start
+    /// if it does not dance from the song's start). See "Edits" below for the systems.
+    #[arg(long, value_name = "DANCE", requires = "regenerate")]
+    pub edit: Option<PathBuf>,
+    /// With --edit: seconds A-B of the dance to make new, e.g. 8-12 (repeatable; at least
+    /// 0.5 s each, inside the dance, not overlapping).
+    #[arg(long, value_name = "A-B", requires = "edit", value_parser = parse_range)]
+    pub regenerate: Vec<[f64; 2]>,
+    /// Start the dance with this motion's last second, unchanged (any format `convert`
+    /// reads; one dancer), and continue from there on the song from --start.
+    #[arg(long, value_name = "MOTION", conflicts_with = "edit")]
+    pub continue_from: Option<PathBuf>,
     #[arg(long, value_name = "FILE")]
     pub leader: Option<PathBuf>,
     /// Duet: the rate the leader was captured at, whatever its file's header says (the frames
@@ -123,8 +137,9 @@ pub struct GenerateArgs {
     /// Dance genre (the model's list; default: the model's default genre).
     #[arg(long)]
     pub genre: Option<String>,
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Random seed (default: 0, or the recorded seed of the --edit dance).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Denoising steps (default: the model's, 50).
     #[arg(long)]
     pub steps: Option<usize>,
@@ -132,7 +147,7 @@ pub struct GenerateArgs {
     /// level (single-scale CFG, s = w − 1) instead of the layer-wise guidance.
     #[arg(long)]
     pub guidance: Option<f64>,
-    /// Start of the music to dance to (seconds).
+    /// Start of the music to dance to (seconds; with --edit: the recorded start).
     #[arg(long)]
     pub start: Option<f64>,
     /// End of the music to dance to (seconds; default: the song's end).

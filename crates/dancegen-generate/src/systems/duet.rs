@@ -7,9 +7,6 @@
 
 use std::path::Path;
 
-use dancegen_formats::dispatch::{
-    ConvertOptions, LoadOptions, LoadedMotion, convert_motion, load_motion_file_with,
-};
 use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
@@ -20,6 +17,7 @@ use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked, sep
 use dancegen_refine::couple_separation::SeparationConfig;
 
 use crate::beat_align::align_follower_to_leader;
+use crate::edit::GivenMotion;
 use crate::error::GenerateError;
 use crate::song::{FPS, Span};
 use crate::system::CommonOptions;
@@ -104,39 +102,7 @@ fn load_leader_with(
     rate_hint: &'static str,
 ) -> Result<SmplMotion, GenerateError> {
     let invalid = |why: String| GenerateError::Invalid(format!("{}: {why}", path.display()));
-    let read = LoadOptions {
-        source_fps,
-        rate_hint,
-    };
-    let loaded = load_motion_file_with(path, &read)?;
-    let opts = ConvertOptions {
-        to_smpl24: true,
-        fps: Some(FPS as f32),
-        ..Default::default()
-    };
-    // The conversion's error already names the file.
-    let m = match convert_motion(path, loaded, &opts).map_err(|e| {
-        GenerateError::Invalid(format!(
-            "{e} (the leader must be one humanoid dancer that retargets to SMPL 24)"
-        ))
-    })? {
-        LoadedMotion::Smpl(m) => m,
-        LoadedMotion::Group(g) => {
-            return Err(invalid(format!(
-                "{} dancers; the leader must be one dancer",
-                g.len()
-            )));
-        }
-        other => {
-            return Err(invalid(format!(
-                "a {} has no joint rotations to lead with (give SMPL motion or a humanoid BVH)",
-                other.kind()
-            )));
-        }
-    };
-    if m.poses.iter().chain(&m.trans).any(|v| !v.is_finite()) {
-        return Err(invalid("the motion holds NaN or infinite values".into()));
-    }
+    let m = GivenMotion::load(path, "the leader", source_fps, rate_hint)?.motion;
     if m.frames() < MIN_LEADER_FRAMES {
         return Err(invalid(format!(
             "{} frames at {FPS} fps; the leader needs at least {MIN_LEADER_FRAMES}",

@@ -18,6 +18,8 @@ pub struct SystemInfo {
     pub default_model: &'static str,
     /// Whether this version can run it.
     pub available: bool,
+    /// The edits it applies ([`DanceSystem::EDITS`]).
+    pub edits: &'static [&'static str],
 }
 
 use crate::system::DanceSystem;
@@ -29,7 +31,34 @@ const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
         model_kind: S::MODEL_KIND,
         default_model: S::DEFAULT_MODEL,
         available: true,
+        edits: S::EDITS,
     }
+}
+
+/// Which system applies which edit, as a text table (`generate --help` and the README).
+pub fn edits_table() -> String {
+    use crate::edit::{CONTINUE, REGENERATE};
+    let ops = [REGENERATE, CONTINUE];
+    let mut out = String::from("Edits (which system supports what):\n  system    ");
+    for op in ops {
+        out += &format!(" {op:<20}");
+    }
+    for s in SYSTEMS.iter().filter(|s| s.available) {
+        out += &format!("\n  {:<10}", s.name);
+        for op in ops {
+            let yes = if s.edits.contains(&op) {
+                "yes"
+            } else {
+                "not yet"
+            };
+            out += &format!(" {yes:<20}");
+        }
+    }
+    out.lines()
+        .map(str::trim_end)
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\nAn edit a system does not apply is refused, naming it, before any work."
 }
 
 /// Every system, in the order they are listed to users.

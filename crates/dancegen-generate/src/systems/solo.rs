@@ -7,6 +7,7 @@ use std::path::Path;
 
 use dancegen_lodgepp::bundle::SoloModel;
 use dancegen_lodgepp::choreo_gpt::CHOREOGRAPHY;
+use dancegen_lodgepp::inpaint::KnownFrames;
 use dancegen_lodgepp::pipeline::{GenerateOptions, Sampler};
 use dancegen_motion::repr::motion::FOOT_JOINTS;
 use dancegen_motion::repr::{Edge151, SmplMotion};
@@ -14,6 +15,7 @@ use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 
 use crate::beat_align::align_to_beats;
+use crate::edit;
 use crate::error::GenerateError;
 use crate::song::FPS;
 use crate::system::CommonOptions;
@@ -67,6 +69,7 @@ impl DanceSystem for Solo {
     const DEFAULT_MODEL: &'static str = "lodgepp-small";
     // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
+    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE];
 
     type Model = SoloModel;
     type Options = SoloOptions;
@@ -94,6 +97,9 @@ impl DanceSystem for Solo {
     ) -> Result<Dance, GenerateError> {
         let (genre_index, genre_name) = genre(model, input.common)?;
         let song = input.song;
+        if !input.common.edit.is_empty() {
+            return edit(model, &input, genre_index, &genre_name);
+        }
         let span = song.span(input.common.start, input.common.end)?;
         if span.seconds() < MIN_SONG_SECONDS {
             return Err(GenerateError::Invalid(format!(
@@ -165,6 +171,115 @@ impl DanceSystem for Solo {
     }
 }
 
+/// An edit (`--edit … --regenerate`, `--continue-from`): the known frames stay, the rest is
+/// inpainted by the PDDM (`dancegen_lodgepp::inpaint`) without the choreography network, and
+/// the known values are spliced back exactly. The beat warp and the foot lock are not applied:
+/// both move frames that must stay as they were.
+fn edit(
+    model: &SoloModel,
+    input: &DanceInput<'_, SoloOptions>,
+    genre_index: usize,
+    genre_name: &str,
+) -> Result<Dance, GenerateError> {
+    let common = input.common;
+    let song = input.song;
+    let span = match common.edit.base.as_ref() {
+        Some(b) => song.span_of_frames(common.start, b.motion.frames())?,
+        None => song.span(common.start, common.end)?,
+    };
+    let frames = span.end_frame - span.first_frame;
+    let known = common
+        .edit
+        .known(frames)?
+        .expect("a non-empty edit knows something");
+    let (values, mask) = known.edge151()?;
+    let opts = generate_options(model, genre_index, common, input.options);
+    let grad_device = input.device.clone().autodiff();
+    let done = model.inpaint_hooked(
+        song.music(&span),
+        &KnownFrames { values, mask },
+        &opts,
+        input.device,
+        &grad_device,
+        input.hook,
+    )?;
+    let mut motion =
+        Edge151::decode(&done.frames).map_err(|e| GenerateError::Generation(e.to_string()))?;
+    let made: Vec<bool> = (0..frames).map(|f| !known.kept(f)).collect();
+    floor_made_frames(&mut motion, &made)?;
+    lift_made_frames_above_floor(&mut motion, &made).map_err(GenerateError::Generation)?;
+    known.splice(&mut motion);
+    let new = known.frames_to_make();
+    Ok(Dance {
+        dancers: vec![Dancer {
+            role: Role::Solo,
+            motion,
+        }],
+        span,
+        summary: format!(
+            "{frames} frames ({:.1} s at {FPS} fps), {new} of them new ({:.1} s) in {} windows, \
+             genre {genre_name}, seed {}",
+            frames as f64 / f64::from(FPS),
+            new as f64 / f64::from(FPS),
+            done.windows,
+            common.seed,
+        ),
+        timing_breakdown: String::new(),
+        notes: vec![format!(
+            "an edit: the kept frames are the input's; the new ones join them (root moved by at \
+             most {:.2} m to meet the kept path); no beat warp or foot lock",
+            done.largest_join_correction_m
+        )],
+        group: None,
+        holistic: None,
+    })
+}
+
+/// Frames over which an edit's floor correction fades in from a join.
+pub const EDIT_FLOOR_BLEND_FRAMES: usize = 15;
+
+/// The made frames of an edit stand on the floor as a whole generation does
+/// ([`SmplMotion::put_feet_on_tracked_floor`]), with the correction faded in (smoothstep) over
+/// [`EDIT_FLOOR_BLEND_FRAMES`] from each kept frame, whose heights must not change.
+fn floor_made_frames(m: &mut SmplMotion, made: &[bool]) -> Result<(), GenerateError> {
+    let mut tracked = m.clone();
+    tracked
+        .put_feet_on_tracked_floor()
+        .map_err(|e| GenerateError::Generation(e.to_string()))?;
+    let t = made.len();
+    let kept: Vec<usize> = (0..t).filter(|&f| !made[f]).collect();
+    for f in (0..t).filter(|&f| made[f]) {
+        let d = kept
+            .iter()
+            .map(|&k| k.abs_diff(f))
+            .min()
+            .unwrap_or(EDIT_FLOOR_BLEND_FRAMES);
+        let u = (d as f32 / EDIT_FLOOR_BLEND_FRAMES as f32).min(1.0);
+        let w = u * u * (3.0 - 2.0 * u);
+        m.trans[f * 3 + 1] += w * (tracked.trans[f * 3 + 1] - m.trans[f * 3 + 1]);
+    }
+    Ok(())
+}
+
+/// Lifts each frame of `made` whose lowest foot joint is below the floor (y = 0) onto it;
+/// the others (kept frames of an edit) are not touched.
+fn lift_made_frames_above_floor(m: &mut SmplMotion, made: &[bool]) -> Result<(), String> {
+    let joints = m.joints_world().map_err(|e| e.to_string())?;
+    for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
+        if !made[f] {
+            continue;
+        }
+        let low = FOOT_JOINTS
+            .iter()
+            .map(|&j| joints[(f * 24 + j) * 3 + 1])
+            .fold(f32::INFINITY, f32::min);
+        if low < 0.0 {
+            p[1] -= low;
+        }
+    }
+    Ok(())
+}
+
 /// The requested genre (default: the model's) as the model's index and name.
 fn genre(model: &SoloModel, common: &CommonOptions) -> Result<(usize, String), GenerateError> {
     let name = common
@@ -223,15 +338,6 @@ fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
 
 /// Lifts every frame whose lowest foot joint is below the floor (y = 0) onto it.
 pub(crate) fn keep_feet_above_floor(m: &mut SmplMotion) -> Result<(), String> {
-    let joints = m.joints_world().map_err(|e| e.to_string())?;
-    for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
-        let low = FOOT_JOINTS
-            .iter()
-            .map(|&j| joints[(f * 24 + j) * 3 + 1])
-            .fold(f32::INFINITY, f32::min);
-        if low < 0.0 {
-            p[1] -= low;
-        }
-    }
-    Ok(())
+    let all = vec![true; m.frames()];
+    lift_made_frames_above_floor(m, &all)
 }

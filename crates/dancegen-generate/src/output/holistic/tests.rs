@@ -99,6 +99,21 @@ fn dance(holistic: bool) -> Dance {
 }
 
 /// A song that is never decoded (only `.mp4` reads it).
+fn record() -> crate::record::DanceRecord {
+    crate::record::DanceRecord {
+        song: "silence.wav".into(),
+        start_s: 0.0,
+        end_s: 1.0,
+        system: "holistic".into(),
+        model: "soulnet-small".into(),
+        seed: 0,
+        dancers: 1,
+        dancer: 0,
+        fps: 30,
+        version: "test".into(),
+    }
+}
+
 fn song() -> AnalysedSong {
     AnalysedSong {
         source: AudioSource::Bytes {
@@ -123,7 +138,7 @@ fn write(dance: &Dance, outputs: Vec<OutputRequest>) -> Result<Vec<PathBuf>, Gen
     let cancel = CancelToken::new();
     let cb = |_: &Progress| {};
     let tracker = Tracker::new(vec![(stage::WRITE_OUTPUTS, 1.0)], &cb, &cancel);
-    write_all(&planned, dance, &song(), &tracker)
+    write_all(&planned, dance, &song(), &record(), &tracker)
 }
 
 fn entries(dir: &Path) -> Vec<String> {
@@ -352,7 +367,7 @@ fn a_csv_of_a_dance_without_a_face_fails_before_any_file() {
     let cancel = CancelToken::new();
     let cb = |_: &Progress| {};
     let tracker = Tracker::new(vec![(stage::WRITE_OUTPUTS, 1.0)], &cb, &cancel);
-    let e = write_all(&planned, &dance(false), &song(), &tracker).unwrap_err();
+    let e = write_all(&planned, &dance(false), &song(), &record(), &tracker).unwrap_err();
     let text = e.to_string();
     assert!(
         matches!(&e, GenerateError::Output { path, .. } if *path == csv),
