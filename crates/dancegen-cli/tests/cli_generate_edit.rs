@@ -1,0 +1,228 @@
+//! The editing contract of `generate` (issue 44) through the binary: an `.npz` it wrote
+//! records what made it, so `--edit DANCE.npz --regenerate A-B` needs no song; the frames
+//! outside the range come back unchanged; `--continue-from` starts with the motion's last
+//! second; and every bad edit is refused with the flag or file named and no output written.
+
+mod common;
+
+use common::*;
+
+fn song() -> String {
+    shared()
+        .join("data/music/sectoid/feelings.ogg")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn npy(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
+    let a = dancegen_io::read_npy(path).unwrap();
+    (a.shape, a.data)
+}
+
+fn refused(args: &[&str], words: &[&str]) {
+    let o = dancegen(args);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    let e = stderr(&o);
+    for w in words {
+        assert!(e.contains(w), "{args:?}: {w:?} not in {e}");
+    }
+}
+
+#[test]
+fn an_edit_keeps_the_rest_of_the_dance_and_reads_the_song_from_its_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "60",
+        "--end",
+        "72",
+        "--seed",
+        "0",
+        "-o",
+        &p("base.npz"),
+        "-o",
+        &p("base.npy"),
+    ]));
+    // No song, no --start: both come from the record.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("base.npz"),
+        "--regenerate",
+        "4-7",
+        "--seed",
+        "5",
+        "-o",
+        &p("edit.npy"),
+        "-o",
+        &p("edit.npz"),
+    ]));
+    let (shape, base) = npy(dir.path().join("base.npy").as_path());
+    let (shape2, edit) = npy(dir.path().join("edit.npy").as_path());
+    assert_eq!(shape, shape2);
+    assert_eq!(shape[0], 360);
+    let frame = |j: &[f64], f: usize| j[f * 72..(f + 1) * 72].to_vec();
+    for f in (0..120).chain(210..360) {
+        let worst = frame(&base, f)
+            .iter()
+            .zip(frame(&edit, f))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 1e-4, "kept frame {f} moved {worst} m");
+    }
+    let moved = (120..210)
+        .map(|f| (frame(&base, f)[21 * 3] - frame(&edit, f)[21 * 3]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        moved > 0.05,
+        "the regenerated range is the old one (wrist moved {moved} m)"
+    );
+
+    // The edited file is a dancegen dance too, and can be edited again.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("edit.npz"),
+        "--regenerate",
+        "9-10.5",
+        "-o",
+        &p("again.npy"),
+    ]));
+
+    // A foreign dance (here: a BVH of it) needs the song; with it the edit runs.
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &p("base.npz"),
+        "-o",
+        &p("base.bvh"),
+    ]));
+    refused(
+        &[
+            "-q",
+            "generate",
+            "--edit",
+            &p("base.bvh"),
+            "--regenerate",
+            "1-2",
+            "-o",
+            &p("x.npy"),
+        ],
+        &["base.bvh", "no dancegen record", "SONG"],
+    );
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "60",
+        "--edit",
+        &p("base.bvh"),
+        "--regenerate",
+        "1-2",
+        "-o",
+        &p("foreign.npy"),
+    ]));
+
+    // Bad edits: named, and nothing written.
+    let none = p("never.npy");
+    let base = p("base.npz");
+    for (extra, words) in [
+        (
+            vec!["--regenerate", "10-13"],
+            vec!["--regenerate 10-13", "outside the dance"],
+        ),
+        (
+            vec!["--regenerate", "2-2.3"],
+            vec!["--regenerate 2-2.3", "at least 0.5 s"],
+        ),
+        (
+            vec!["--regenerate", "1-4", "--regenerate", "3-5"],
+            vec!["overlap"],
+        ),
+        (
+            vec!["--regenerate", "4-2"],
+            vec!["4-2", "START must be before END"],
+        ),
+        (
+            vec!["--regenerate", "1-2", "--system", "group"],
+            vec!["a solo dance", "--system solo"],
+        ),
+    ] {
+        let mut args = vec!["-q", "generate", "--edit", base.as_str()];
+        args.extend(extra);
+        args.extend(["-o", &none]);
+        refused(&args, &words);
+        assert!(!std::path::Path::new(&none).exists());
+    }
+    refused(
+        &["-q", "generate", "--edit", &p("base.npz"), "-o", &none],
+        &["--regenerate"],
+    );
+}
+
+#[test]
+fn a_continuation_starts_with_the_motions_last_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "30",
+        "--end",
+        "36",
+        "-o",
+        &p("first.npz"),
+        "-o",
+        &p("first.npy"),
+    ]));
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "35",
+        "--end",
+        "43",
+        "--continue-from",
+        &p("first.npz"),
+        "-o",
+        &p("next.npy"),
+    ]));
+    let (_, first) = npy(dir.path().join("first.npy").as_path());
+    let (shape, next) = npy(dir.path().join("next.npy").as_path());
+    assert_eq!(shape[0], 240);
+    let from = first.len() / 72 - 30;
+    let worst = (0..30 * 72)
+        .map(|i| (first[from * 72 + i] - next[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-4, "the kept second moved {worst} m");
+    // Duet and group do not continue yet, and say so.
+    refused(
+        &[
+            "-q",
+            "generate",
+            &s,
+            "--system",
+            "group",
+            "--dancers",
+            "3",
+            "--continue-from",
+            &p("first.npz"),
+            "-o",
+            &p("g.npy"),
+        ],
+        &["--continue-from is not supported by --system group"],
+    );
+}
