@@ -111,3 +111,21 @@ pub fn by_model_kind(kind: &str) -> Option<SystemInfo> {
         .find(|s| s.available && s.model_kind == kind)
         .copied()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_readme_shows_the_table_of_edits_the_systems_declare() {
+        let readme =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
+                .expect("the repository's README");
+        let table = edits_table();
+        assert!(
+            readme.contains(&table),
+            "README.md's table of edits is not the systems' own; put this in it:\n{table}"
+        );
+        assert!(table.contains("solo       yes"), "{table}");
+    }
+}
