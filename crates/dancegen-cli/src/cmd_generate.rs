@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use dancegen_generate::edit::{Edit, GivenMotion};
+use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, parse_joint_set};
 use dancegen_generate::record::DanceRecord;
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader_at};
@@ -163,6 +163,23 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         )?),
         None => None,
     };
+    let keep_joints = match (&args.keep_joints, &args.from) {
+        (Some(spec), Some(from)) => {
+            let (joints, root) = parse_joint_set(spec).map_err(anyhow::Error::msg)?;
+            Some(KeepJoints {
+                spec: spec.clone(),
+                joints,
+                root,
+                from: GivenMotion::load(
+                    from,
+                    "the motion to keep joints from",
+                    args.from_fps,
+                    "--from-fps N",
+                )?,
+            })
+        }
+        _ => None,
+    };
     Ok(Request {
         song,
         system,
@@ -177,6 +194,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                 base: edited.map(|e| e.dance),
                 regenerate: args.regenerate.clone(),
                 continue_from,
+                keep_joints,
             },
         },
         model,

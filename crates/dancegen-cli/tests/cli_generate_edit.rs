@@ -226,3 +226,91 @@ fn a_continuation_starts_with_the_motions_last_second() {
         &["--continue-from is not supported by --system group"],
     );
 }
+
+#[test]
+fn kept_joints_come_from_the_given_motion_and_unknown_joints_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "30",
+        "--end",
+        "36",
+        "-o",
+        &p("moves.npz"),
+        "-o",
+        &p("moves.npy"),
+    ]));
+    // No --end: the dance lasts as long as the --from motion.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "50",
+        "--keep-joints",
+        "lower",
+        "--from",
+        &p("moves.npz"),
+        "--seed",
+        "3",
+        "-o",
+        &p("kept.npy"),
+    ]));
+    let (shape, moves) = npy(dir.path().join("moves.npy").as_path());
+    let (shape2, kept) = npy(dir.path().join("kept.npy").as_path());
+    assert_eq!(shape, shape2);
+    // Pelvis, hips, knees, ankles and feet stand where the motion's do.
+    for f in 0..shape[0] {
+        for j in [0, 1, 2, 4, 5, 7, 8, 10, 11] {
+            for c in 0..3 {
+                let i = f * 72 + 3 * j + c;
+                assert!((moves[i] - kept[i]).abs() <= 1e-4, "frame {f} joint {j}");
+            }
+        }
+    }
+    let wrist_moved = (0..shape[0])
+        .map(|f| (moves[f * 72 + 21 * 3 + 1] - kept[f * 72 + 21 * 3 + 1]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        wrist_moved > 0.05,
+        "the arms are the motion's ({wrist_moved} m)"
+    );
+    refused(
+        &[
+            "-q",
+            "generate",
+            &s,
+            "--keep-joints",
+            "left_knee,tail",
+            "--from",
+            &p("moves.npz"),
+            "-o",
+            &p("x.npy"),
+        ],
+        &["\"tail\"", "not a joint of the SMPL 24 skeleton"],
+    );
+    refused(
+        &[
+            "-q",
+            "generate",
+            &s,
+            "--start",
+            "30",
+            "--end",
+            "40",
+            "--keep-joints",
+            "arms",
+            "--from",
+            &p("moves.npz"),
+            "-o",
+            &p("x.npy"),
+        ],
+        &["--from", "moves.npz", "6.00 s of motion"],
+    );
+    assert!(!dir.path().join("x.npy").exists());
+}

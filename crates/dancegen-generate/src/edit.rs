@@ -23,6 +23,7 @@ use crate::song::FPS;
 /// The operations, as [`Edit::operations`] and `DanceSystem::EDITS` name them.
 pub const REGENERATE: &str = "--edit/--regenerate";
 pub const CONTINUE: &str = "--continue-from";
+pub const KEEP_JOINTS: &str = "--keep-joints";
 
 /// Shortest range `--regenerate` accepts: shorter is a twitch, not a new phrase.
 pub const MIN_RANGE_SECONDS: f64 = 0.5;
@@ -104,12 +105,99 @@ pub struct Edit {
     /// `--continue-from`: the new dance starts with this motion's last [`CONTINUE_SECONDS`],
     /// unchanged, and continues from there.
     pub continue_from: Option<GivenMotion>,
+    /// `--keep-joints SET --from MOTION`: those joints' rotations (and with `lower` the root)
+    /// are MOTION's for the whole dance; the rest is made to go with them and the music.
+    pub keep_joints: Option<KeepJoints>,
+}
+
+/// What `--keep-joints` keeps, and from which motion.
+#[derive(Clone, Debug)]
+pub struct KeepJoints {
+    /// As the user wrote it, for messages.
+    pub spec: String,
+    /// Bit `j` set: joint `j`'s rotation is kept.
+    pub joints: u32,
+    /// The pelvis position is kept too (`lower`).
+    pub root: bool,
+    pub from: GivenMotion,
+}
+
+/// SMPL 24 joints of the named sets of `--keep-joints`.
+const LEGS: [usize; 8] = [1, 2, 4, 5, 7, 8, 10, 11];
+const ARMS: [usize; 10] = [13, 14, 16, 17, 18, 19, 20, 21, 22, 23];
+const SPINE_AND_HEAD: [usize; 4] = [3, 6, 9, 12];
+const HEAD: usize = 15;
+
+/// Long SMPL joint names (the SMPL-X order's first 22, then the SMPL hands), accepted beside
+/// the short ones of `dancegen_motion::skeleton::SMPL24_NAMES`.
+const LONG_NAMES: [&str; 24] = [
+    "pelvis",
+    "left_hip",
+    "right_hip",
+    "spine1",
+    "left_knee",
+    "right_knee",
+    "spine2",
+    "left_ankle",
+    "right_ankle",
+    "spine3",
+    "left_foot",
+    "right_foot",
+    "neck",
+    "left_collar",
+    "right_collar",
+    "head",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_hand",
+    "right_hand",
+];
+
+/// The joints (bit mask) and whether the root is kept for a `--keep-joints` value: `upper`,
+/// `lower` (legs, pelvis rotation and root position), `arms`, `legs`, or SMPL joint names
+/// separated by commas (`left_knee` or `lknee`; `pelvis`/`root` keeps the pelvis rotation).
+pub fn parse_joint_set(spec: &str) -> Result<(u32, bool), String> {
+    let bits = |js: &[usize]| js.iter().fold(0u32, |m, &j| m | 1 << j);
+    match spec.trim() {
+        "lower" => return Ok((bits(&LEGS) | 1, true)),
+        "legs" => return Ok((bits(&LEGS), false)),
+        "arms" => return Ok((bits(&ARMS), false)),
+        "upper" => return Ok((bits(&ARMS) | bits(&SPINE_AND_HEAD) | 1 << HEAD, false)),
+        _ => {}
+    }
+    let short = dancegen_motion::skeleton::SMPL24_NAMES;
+    let mut mask = 0u32;
+    for name in spec.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        let j = LONG_NAMES
+            .iter()
+            .position(|n| n.eq_ignore_ascii_case(name))
+            .or_else(|| short.iter().position(|n| n.eq_ignore_ascii_case(name)))
+            .ok_or_else(|| {
+                format!(
+                    "--keep-joints: {name:?} is not a joint of the SMPL 24 skeleton (use upper, \
+                     lower, arms, legs, or names such as {})",
+                    LONG_NAMES.join(", ")
+                )
+            })?;
+        mask |= 1 << j;
+    }
+    if mask == 0 {
+        return Err("--keep-joints: name a set (upper, lower, arms, legs) or joints".into());
+    }
+    Ok((mask, false))
 }
 
 impl Edit {
     /// Whether this is a plain generation.
     pub fn is_empty(&self) -> bool {
-        self.base.is_none() && self.regenerate.is_empty() && self.continue_from.is_none()
+        self.base.is_none()
+            && self.regenerate.is_empty()
+            && self.continue_from.is_none()
+            && self.keep_joints.is_none()
     }
 
     /// The operations asked for, as the flags name them (for "not supported" messages).
@@ -121,12 +209,20 @@ impl Edit {
         if self.continue_from.is_some() {
             ops.push(CONTINUE);
         }
+        if self.keep_joints.is_some() {
+            ops.push(KEEP_JOINTS);
+        }
         ops
     }
 
     /// Seconds of the edited dance, when the edit fixes them (the dance being edited).
     pub fn seconds(&self) -> Option<f64> {
         self.base.as_ref().map(GivenMotion::seconds)
+    }
+
+    /// Frames of the `--keep-joints --from` motion, which a dance cannot outlast.
+    pub fn kept_joints_frames(&self) -> Option<usize> {
+        self.keep_joints.as_ref().map(|k| k.from.motion.frames())
     }
 
     /// Checks the edit on its own (before the song is read): ranges inside the dance, in
@@ -149,6 +245,15 @@ impl Edit {
             return bad(format!(
                 "--continue-from {} and --edit both give the dance's start; use one",
                 c.label
+            ));
+        }
+        if let Some(k) = &self.keep_joints
+            && (self.base.is_some() || self.continue_from.is_some())
+        {
+            return bad(format!(
+                "--keep-joints {} with --edit or --continue-from is not supported yet; use it \
+                 on its own",
+                k.spec
             ));
         }
         if let Some(b) = &self.base {
@@ -242,6 +347,28 @@ impl Edit {
                 k.root[f] = true;
             }
             return Ok(Some(k));
+        }
+        if let Some(k) = &self.keep_joints {
+            let src = &k.from.motion;
+            if src.frames() < frames {
+                return Err(GenerateError::Invalid(format!(
+                    "--from {}: {:.2} s of motion for a dance of {:.2} s (give --end, or a \
+                     longer motion)",
+                    k.from.label,
+                    src.frames() as f64 / f64::from(FPS),
+                    frames as f64 / f64::from(FPS)
+                )));
+            }
+            let motion = SmplMotion::new(
+                FPS as f32,
+                src.poses[..frames * POSE_DIMS].to_vec(),
+                src.trans[..frames * 3].to_vec(),
+            )
+            .map_err(|e| GenerateError::Invalid(format!("--from {}: {e}", k.from.label)))?;
+            let mut known = KnownParts::none(motion);
+            known.joints.fill(k.joints);
+            known.root.fill(k.root);
+            return Ok(Some(known));
         }
         Ok(None)
     }
@@ -365,7 +492,7 @@ mod tests {
         Edit {
             base: Some(given(300)),
             regenerate: ranges.to_vec(),
-            continue_from: None,
+            ..Edit::default()
         }
     }
 
@@ -418,6 +545,50 @@ mod tests {
         assert!(mask[60 * 151..120 * 151].iter().all(|&m| m == 0.0));
         let e = edit.known(299).unwrap_err().to_string();
         assert!(e.contains("300 frames") && e.contains("--start"), "{e}");
+    }
+
+    #[test]
+    fn joint_sets_and_names_parse_and_unknown_names_are_refused() {
+        let (lower, root) = parse_joint_set("lower").unwrap();
+        assert!(root && lower & 1 != 0 && lower & (1 << 4) != 0 && lower & (1 << 20) == 0);
+        let (legs, root) = parse_joint_set("legs").unwrap();
+        assert!(!root && legs & 1 == 0 && legs.count_ones() == 8);
+        let (upper, _) = parse_joint_set("upper").unwrap();
+        assert_eq!(upper & legs, 0);
+        assert_eq!(
+            (upper | legs | 1).count_ones(),
+            24,
+            "upper + legs + pelvis is everything"
+        );
+        assert_eq!(
+            parse_joint_set("left_knee, rknee").unwrap(),
+            ((1 << 4) | (1 << 5), false)
+        );
+        let e = parse_joint_set("left_knee,tail").unwrap_err();
+        assert!(e.contains("\"tail\"") && e.contains("SMPL 24"), "{e}");
+        assert!(parse_joint_set(" , ").is_err());
+    }
+
+    #[test]
+    fn kept_joints_are_known_in_every_frame_and_need_a_long_enough_motion() {
+        let (joints, root) = parse_joint_set("lower").unwrap();
+        let edit = Edit {
+            keep_joints: Some(KeepJoints {
+                spec: "lower".into(),
+                joints,
+                root,
+                from: given(100),
+            }),
+            ..Edit::default()
+        };
+        let k = edit.known(90).unwrap().unwrap();
+        assert!((0..90).all(|f| k.joints[f] == joints && k.root[f] && !k.kept(f)));
+        let (_, mask) = k.edge151().unwrap();
+        let knee = Edge151::ROT6D.start + 6 * 4;
+        let wrist = Edge151::ROT6D.start + 6 * 20;
+        assert!(mask[knee] == 1.0 && mask[wrist] == 0.0 && mask[Edge151::ROOT.start] == 1.0);
+        let e = edit.known(101).unwrap_err().to_string();
+        assert!(e.contains("--from base.npz"), "{e}");
     }
 
     #[test]

@@ -126,7 +126,7 @@ fn regenerated() -> &'static (SmplMotion, Vec<std::ops::Range<usize>>) {
                 motion: original.clone(),
             }),
             regenerate: ranges.to_vec(),
-            continue_from: None,
+            ..Edit::default()
         };
         let (edited, _) = run(&solo(3, 60.0, None, edit));
         let made = ranges
@@ -237,7 +237,7 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
         Edit {
             base: Some(given.clone()),
             regenerate: vec![[1.0, 2.0]],
-            continue_from: None,
+            ..Edit::default()
         },
     );
     group.system = SystemRequest::Group(dancegen_generate::systems::group::GroupOptions::new(3));
@@ -256,11 +256,74 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
         Edit {
             base: Some(given),
             regenerate: vec![[29.0, 31.0]],
-            continue_from: None,
+            ..Edit::default()
         },
     );
     let e = generator()
         .run(&outside, &|_| {}, &CancelToken::new())
         .unwrap_err();
     assert!(e.to_string().contains("outside the dance"), "{e}");
+}
+
+#[test]
+fn kept_legs_and_root_stay_and_the_upper_body_is_new() {
+    let (original, _) = base();
+    let (joints_mask, root) = dancegen_generate::edit::parse_joint_set("lower").unwrap();
+    let edit = Edit {
+        keep_joints: Some(dancegen_generate::edit::KeepJoints {
+            spec: "lower".into(),
+            joints: joints_mask,
+            root,
+            from: GivenMotion {
+                label: "base".into(),
+                motion: original.clone(),
+            },
+        }),
+        ..Edit::default()
+    };
+    let (new, _) = run(&solo(5, 60.0, None, edit));
+    assert_eq!(new.frames(), original.frames());
+    for f in 0..new.frames() {
+        for j in (0..24).filter(|j| joints_mask & (1 << j) != 0) {
+            let at = f * 72 + 3 * j;
+            assert_eq!(
+                new.poses[at..at + 3],
+                original.poses[at..at + 3],
+                "frame {f} joint {j}"
+            );
+        }
+        assert_eq!(
+            new.trans[f * 3..f * 3 + 3],
+            original.trans[f * 3..f * 3 + 3]
+        );
+    }
+    let (jo, jn) = (joints(original), joints(&new));
+    // The arms are new: wrists and hands relative to the pelvis, mean distance.
+    let mut d = 0.0;
+    for f in 0..new.frames() {
+        for j in [20, 21, 22, 23] {
+            let (a, b) = (f * 72 + 3 * j, f * 72);
+            d += (0..3)
+                .map(|c| ((jo[a + c] - jo[b + c]) - (jn[a + c] - jn[b + c])).powi(2))
+                .sum::<f64>()
+                .sqrt();
+        }
+    }
+    let d = d / (4 * new.frames()) as f64;
+    let jerk = |j: &[f64]| {
+        let v = dancegen_metrics::longform::mean_joint_jerk(j, 30.0).unwrap();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let (jerk_o, jerk_n) = (jerk(&jo), jerk(&jn));
+    eprintln!(
+        "kept lower: hands {d:.3} m from the original's; jerk {jerk_n:.0} against {jerk_o:.0}"
+    );
+    assert!(
+        d >= REAL_POSE_SPREAD_M / 2.0,
+        "the arms are the old ones ({d:.3} m)"
+    );
+    assert!(
+        jerk_n <= 1.5 * jerk_o,
+        "jerk {jerk_n:.0} against {jerk_o:.0}"
+    );
 }

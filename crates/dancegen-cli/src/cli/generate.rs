@@ -90,6 +90,19 @@ pub struct GenerateArgs {
     /// reads; one dancer), and continue from there on the song from --start.
     #[arg(long, value_name = "MOTION", conflicts_with = "edit")]
     pub continue_from: Option<PathBuf>,
+    /// Keep these joints' rotations from --from for the whole dance and make the rest to go
+    /// with them and the music: upper, lower (legs, pelvis and root path), arms, legs, or SMPL
+    /// joint names separated by commas (left_knee,right_knee). Without --end the dance lasts
+    /// as long as the --from motion.
+    #[arg(long, value_name = "SET", requires = "from")]
+    pub keep_joints: Option<String>,
+    /// The motion --keep-joints keeps joints of (any format `convert` reads; one dancer).
+    #[arg(long, value_name = "MOTION", requires = "keep_joints")]
+    pub from: Option<PathBuf>,
+    /// The rate --from was captured at, whatever its file's header says (e.g. 60 for the CMU
+    /// salsa BVHs, whose headers say 120).
+    #[arg(long, value_name = "FPS", requires = "from", value_parser = parse_source_fps)]
+    pub from_fps: Option<f64>,
     #[arg(long, value_name = "FILE")]
     pub leader: Option<PathBuf>,
     /// Duet: the rate the leader was captured at, whatever its file's header says (the frames

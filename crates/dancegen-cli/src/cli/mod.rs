@@ -59,7 +59,7 @@ pub enum Command {
     /// Generate a solo dance for a song (Lodge++), or with --leader the partner of a given
     /// leader (ReactDance); the installed default models (see `dancegen models`).
     #[command(after_long_help = dancegen_generate::systems::edits_table())]
-    Generate(GenerateArgs),
+    Generate(Box<GenerateArgs>),
     /// Generate many songs from a manifest (one JSON object per line: id, song, outputs and
     /// any `generate` option by name): one model load, resumable (songs with a done.json are
     /// skipped), shardable (--shard I/N) across processes and machines.

@@ -37,8 +37,8 @@ const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
 
 /// Which system applies which edit, as a text table (`generate --help` and the README).
 pub fn edits_table() -> String {
-    use crate::edit::{CONTINUE, REGENERATE};
-    let ops = [REGENERATE, CONTINUE];
+    use crate::edit::{CONTINUE, KEEP_JOINTS, REGENERATE};
+    let ops = [REGENERATE, CONTINUE, KEEP_JOINTS];
     let mut out = String::from("Edits (which system supports what):\n  system    ");
     for op in ops {
         out += &format!(" {op:<20}");

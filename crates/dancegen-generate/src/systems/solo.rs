@@ -69,7 +69,7 @@ impl DanceSystem for Solo {
     const DEFAULT_MODEL: &'static str = "lodgepp-small";
     // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
-    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE];
+    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE, edit::KEEP_JOINTS];
 
     type Model = SoloModel;
     type Options = SoloOptions;
@@ -171,8 +171,8 @@ impl DanceSystem for Solo {
     }
 }
 
-/// An edit (`--edit … --regenerate`, `--continue-from`): the known frames stay, the rest is
-/// inpainted by the PDDM (`dancegen_lodgepp::inpaint`) without the choreography network, and
+/// An edit (`--edit … --regenerate`, `--continue-from`, `--keep-joints … --from`): the known
+/// frames and joints stay, the rest is inpainted by the PDDM (`dancegen_lodgepp::inpaint`) without the choreography network, and
 /// the known values are spliced back exactly. The beat warp and the foot lock are not applied:
 /// both move frames that must stay as they were.
 fn edit(
@@ -183,9 +183,14 @@ fn edit(
 ) -> Result<Dance, GenerateError> {
     let common = input.common;
     let song = input.song;
-    let span = match common.edit.base.as_ref() {
-        Some(b) => song.span_of_frames(common.start, b.motion.frames())?,
-        None => song.span(common.start, common.end)?,
+    let span = match (common.edit.base.as_ref(), common.edit.kept_joints_frames()) {
+        (Some(b), _) => song.span_of_frames(common.start, b.motion.frames())?,
+        // Kept joints without --end: the dance lasts as long as their motion (or the song).
+        (None, Some(n)) if common.end.is_none() => {
+            let first = (common.start.unwrap_or(0.0) * f64::from(FPS)).round() as usize;
+            song.span_of_frames(common.start, n.min(song.frames().saturating_sub(first)))?
+        }
+        _ => song.span(common.start, common.end)?,
     };
     let frames = span.end_frame - span.first_frame;
     let known = common
