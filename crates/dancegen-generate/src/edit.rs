@@ -128,34 +128,17 @@ const ARMS: [usize; 10] = [13, 14, 16, 17, 18, 19, 20, 21, 22, 23];
 const SPINE_AND_HEAD: [usize; 4] = [3, 6, 9, 12];
 const HEAD: usize = 15;
 
-/// Long SMPL joint names (the SMPL-X order's first 22, then the SMPL hands), accepted beside
-/// the short ones of `dancegen_motion::skeleton::SMPL24_NAMES`.
-const LONG_NAMES: [&str; 24] = [
-    "pelvis",
-    "left_hip",
-    "right_hip",
-    "spine1",
-    "left_knee",
-    "right_knee",
-    "spine2",
-    "left_ankle",
-    "right_ankle",
-    "spine3",
-    "left_foot",
-    "right_foot",
-    "neck",
-    "left_collar",
-    "right_collar",
-    "head",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_hand",
-    "right_hand",
-];
+/// Long names of the SMPL 24 joints that differ from SMPL-X's (whose first 22 are the body's,
+/// `dancegen_motion::skeleton::SMPLX55_NAMES`): SMPL's last two are the hands.
+const SMPL_HANDS: [&str; 2] = ["left_hand", "right_hand"];
+
+/// Joint `j`'s long name (`left_knee`), as SMPL-X and most tools write it.
+fn long_name(j: usize) -> &'static str {
+    match j {
+        22 | 23 => SMPL_HANDS[j - 22],
+        _ => dancegen_motion::skeleton::SMPLX55_NAMES[j],
+    }
+}
 
 /// The joints (bit mask) and whether the root is kept for a `--keep-joints` value: `upper`,
 /// `lower` (legs, pelvis rotation and root position), `arms`, `legs`, or SMPL joint names
@@ -172,15 +155,14 @@ pub fn parse_joint_set(spec: &str) -> Result<(u32, bool), String> {
     let short = dancegen_motion::skeleton::SMPL24_NAMES;
     let mut mask = 0u32;
     for name in spec.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-        let j = LONG_NAMES
-            .iter()
-            .position(|n| n.eq_ignore_ascii_case(name))
+        let j = (0..24)
+            .position(|j| long_name(j).eq_ignore_ascii_case(name))
             .or_else(|| short.iter().position(|n| n.eq_ignore_ascii_case(name)))
             .ok_or_else(|| {
                 format!(
                     "--keep-joints: {name:?} is not a joint of the SMPL 24 skeleton (use upper, \
                      lower, arms, legs, or names such as {})",
-                    LONG_NAMES.join(", ")
+                    (0..24).map(long_name).collect::<Vec<_>>().join(", ")
                 )
             })?;
         mask |= 1 << j;

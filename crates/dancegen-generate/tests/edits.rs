@@ -13,9 +13,10 @@ use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, motion_
 use dancegen_metrics::edit::{EditQuality, edit_quality};
 use dancegen_motion::repr::SmplMotion;
 
-/// Real dancers' pose spread (docs/group-eval.md, the held-out real tracks at their true
-/// rates): a new part must differ from the old one by at least half of it.
-const REAL_POSE_SPREAD_M: f64 = 0.161;
+/// Real dancers' pose spread: the held-out real solo tracks at their true rates, 15.8 cm
+/// (docs/group-eval.md, "Motion energy", `bash tools/group_eval.sh`). The issue asks a new part
+/// to differ from the old one by at least half of it.
+const REAL_POSE_SPREAD_M: f64 = 0.158;
 
 fn shared() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
@@ -106,7 +107,7 @@ fn check_joins(q: &EditQuality, jerk_ratio: bool) {
         q.other_root_step_m
     );
     assert!(
-        q.join_foot_slide_m <= q.other_foot_slide_m.max(0.02),
+        q.join_foot_slide_m <= q.other_foot_slide_m,
         "a planted foot slides {:.3} m in a frame at a join, {:.3} m elsewhere",
         q.join_foot_slide_m,
         q.other_foot_slide_m

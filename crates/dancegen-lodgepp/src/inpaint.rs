@@ -25,19 +25,17 @@
 //! Known values are copied into the result unchanged, so kept frames are exactly kept.
 
 use dancegen_nn::burn;
-use dancegen_nn::progress::{Cancelled, DENOISING, StepHook};
+use dancegen_nn::progress::{Cancelled, StepHook};
 
-use burn::tensor::{Device, Tensor, TensorData};
+use burn::tensor::Device;
 
 use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::BOUNDARY_FRAMES;
-use crate::heading::{self, Stats};
 use crate::layout::{DIMS, ROOT_HORIZONTAL};
-use crate::pipeline::{GenerateOptions, host};
+use crate::pipeline::{CuedWindow, GenerateOptions};
 use crate::primitives::WindowPrimitives;
 use crate::rotation_tracks::bridge_short_rows;
-use crate::sampler::{HardCues, sample_windows_hooked};
 use crate::seams::{CuedFrames, SeamBlend, anchor_windows_blended};
 
 /// What is known of a dance: raw EDGE-151 frames `[T, 151]` (Z-up, absolute root as the
@@ -130,13 +128,11 @@ impl SoloModel {
         let needs: Vec<bool> = (0..total).map(|f| known.needs(f)).collect();
         let plan = plan_windows(&needs, n);
         let (scale, shift) = self.pddm.denorm.host();
-        let stats = self.heading_stats();
         let all_known_root = (0..total).all(|f| known.root_known(f));
         let mut buf = known.values.clone();
         let mut done = known.mask.clone();
         // The network's own root x/y at the frames just before and after each run.
         let mut mismatch: Vec<(usize, usize, [f32; 2], [f32; 2])> = Vec::new();
-        let shift_model = self.shift();
         for (wi, w) in plan.iter().enumerate() {
             let len = n.min(total - w.start);
             let frame = |f: usize| w.start + f.min(len - 1);
@@ -169,46 +165,21 @@ impl SoloModel {
                     }
                 }
             }
-            let turn = stats.as_ref().map(|(scale, shift)| {
-                let stats = Stats { scale, shift };
-                let t = heading::window_turns(std::slice::from_ref(&prims), &[0.0], &stats);
-                heading::turn_cues(
-                    std::slice::from_mut(&mut prims),
-                    &mut cue_v,
-                    &cue_m,
-                    &t,
-                    &stats,
-                );
-                t[0]
-            });
-            let m: Vec<f32> = (0..n)
+            let music_window: Vec<f32> = (0..n)
                 .flat_map(|f| {
                     let g = frame(f);
                     music[g * MUSIC_DIMS..(g + 1) * MUSIC_DIMS].iter().copied()
                 })
                 .collect();
-            let cond = self.cond(m, std::slice::from_ref(&prims), opts.genre, device);
-            let cues = HardCues {
-                values: Tensor::from_data(TensorData::new(cue_v, [1, n, DIMS]), device),
-                mask: Tensor::from_data(TensorData::new(cue_m, [1, n, DIMS]), device),
+            let window = CuedWindow {
+                music: music_window,
+                prims,
+                cue_v,
+                cue_m,
+                cued: true,
             };
-            let windows = plan.len();
-            let per_window = |_: &'static str, step: usize, steps: usize| {
-                hook.on_step(DENOISING, wi * steps + step, windows * steps)
-            };
-            let mut x = host(sample_windows_hooked(
-                &self.pddm,
-                &shift_model,
-                &cond,
-                Some(&cues),
-                &self.sample_opts(opts, opts.seed.wrapping_add(wi as u64)),
-                device,
-                grad_device,
-                &per_window,
-            )?);
-            if let (Some((scale, shift)), Some(a)) = (&stats, turn) {
-                heading::turn_windows(&mut x, n, &[-a], &Stats { scale, shift });
-            }
+            let mut x =
+                self.sample_cued_window(window, opts, (wi, plan.len()), device, grad_device, hook)?;
             self.to_raw(&mut x);
             bridge_short_rows(&mut x, n);
             // The small model does not continue its cues by itself (`crate::seams`): the run's

@@ -101,6 +101,16 @@ impl GenerateOptions {
     }
 }
 
+/// One window for [`SoloModel::sample_cued_window`]: its music `[n, 35]`, primitives and hard
+/// cues `[n, 151]` (normalised, window-relative root), and whether the cues apply.
+pub(crate) struct CuedWindow {
+    pub music: Vec<f32>,
+    pub prims: WindowPrimitives,
+    pub cue_v: Vec<f32>,
+    pub cue_m: Vec<f32>,
+    pub cued: bool,
+}
+
 /// A generated dance: raw EDGE-151 frames (Z-up, absolute root) and what was done.
 pub struct GeneratedDance {
     /// `[frames, 151]`.
@@ -521,10 +531,8 @@ impl SoloModel {
         let n = self.config.pddm.pddm.window;
         let adv = n - BOUNDARY_FRAMES;
         let l = frames.saturating_sub(BOUNDARY_FRAMES).div_ceil(adv).max(1);
-        let shift = self.shift();
         let mut out: Vec<f32> = Vec::with_capacity(l * n * DIMS);
         let mut prev: Option<Vec<f32>> = None;
-        let stats = self.heading_stats();
         for w in 0..l {
             let mut p = WindowPrimitives::empty(n);
             let mut cue_v = vec![0f32; n * DIMS];
@@ -536,40 +544,80 @@ impl SoloModel {
                 cue_v[..head.len()].copy_from_slice(&head);
                 cue_m[..head.len()].iter_mut().for_each(|v| *v = 1.0);
             }
-            // The window in its heading frame (the first window's is free: 0).
-            let turn = stats.as_ref().map(|(scale, shift)| {
-                let stats = Stats { scale, shift };
-                let t = heading::window_turns(std::slice::from_ref(&p), &[0.0], &stats);
-                heading::turn_cues(std::slice::from_mut(&mut p), &mut cue_v, &cue_m, &t, &stats);
-                t[0]
-            });
             let m = Self::music_windows(&music[w * adv * MUSIC_DIMS..], frames - w * adv, n, n, 1);
-            let cond = self.cond(m, std::slice::from_ref(&p), opts.genre, device);
-            let cues = HardCues {
-                values: Tensor::from_data(TensorData::new(cue_v, [1, n, DIMS]), device),
-                mask: Tensor::from_data(TensorData::new(cue_m, [1, n, DIMS]), device),
+            let window = CuedWindow {
+                music: m,
+                prims: p,
+                cue_v,
+                cue_m,
+                cued: prev.is_some(),
             };
-            // Steps are counted over all windows, so the hook sees one run of l · steps.
-            let per_window = |_: &'static str, done: usize, total: usize| {
-                hook.on_step(DENOISING, w * total + done, l * total)
-            };
-            let mut x = host(sample_windows_hooked(
-                &self.pddm,
-                &shift,
-                &cond,
-                prev.as_ref().map(|_| &cues),
-                &self.sample_opts(opts, opts.seed.wrapping_add(w as u64)),
-                device,
-                grad_device,
-                &per_window,
-            )?);
-            if let (Some((scale, shift)), Some(a)) = (&stats, turn) {
-                heading::turn_windows(&mut x, n, &[-a], &Stats { scale, shift });
-            }
+            let x = self.sample_cued_window(window, opts, (w, l), device, grad_device, hook)?;
             out.extend_from_slice(&x);
             prev = Some(x);
         }
         Ok(out)
+    }
+
+    /// Samples one window (normalised, window-relative root) with its primitives and, when
+    /// `cued`, its hard cues, in its heading frame when the model uses one (the first frame's
+    /// heading when cued, else 0) and turned back. `index` is (this window, windows in the run):
+    /// steps are reported over the whole run, and window `i` gets seed `opts.seed + i`. Shared by
+    /// the autoregressive sampler and editing (`crate::inpaint`).
+    pub(crate) fn sample_cued_window(
+        &self,
+        window: CuedWindow,
+        opts: &GenerateOptions,
+        index: (usize, usize),
+        device: &Device,
+        grad_device: &Device,
+        hook: &dyn StepHook,
+    ) -> Result<Vec<f32>, Cancelled> {
+        let n = self.config.pddm.pddm.window;
+        let CuedWindow {
+            music,
+            mut prims,
+            mut cue_v,
+            cue_m,
+            cued,
+        } = window;
+        let stats = self.heading_stats();
+        let turn = stats.as_ref().map(|(scale, shift)| {
+            let stats = Stats { scale, shift };
+            let t = heading::window_turns(std::slice::from_ref(&prims), &[0.0], &stats);
+            heading::turn_cues(
+                std::slice::from_mut(&mut prims),
+                &mut cue_v,
+                &cue_m,
+                &t,
+                &stats,
+            );
+            t[0]
+        });
+        let cond = self.cond(music, std::slice::from_ref(&prims), opts.genre, device);
+        let cues = HardCues {
+            values: Tensor::from_data(TensorData::new(cue_v, [1, n, DIMS]), device),
+            mask: Tensor::from_data(TensorData::new(cue_m, [1, n, DIMS]), device),
+        };
+        let (w, l) = index;
+        // Steps are counted over all windows, so the hook sees one run of l · steps.
+        let per_window = |_: &'static str, done: usize, total: usize| {
+            hook.on_step(DENOISING, w * total + done, l * total)
+        };
+        let mut x = host(sample_windows_hooked(
+            &self.pddm,
+            &self.shift(),
+            &cond,
+            cued.then_some(&cues),
+            &self.sample_opts(opts, opts.seed.wrapping_add(w as u64)),
+            device,
+            grad_device,
+            &per_window,
+        )?);
+        if let (Some((scale, shift)), Some(a)) = (&stats, turn) {
+            heading::turn_windows(&mut x, n, &[-a], &Stats { scale, shift });
+        }
+        Ok(x)
     }
 
     /// EDGE-style: half-overlapping windows in one batch, first halves overwritten after every

@@ -193,6 +193,14 @@ fn edit(
         _ => song.span(common.start, common.end)?,
     };
     let frames = span.end_frame - span.first_frame;
+    if span.seconds() < MIN_SONG_SECONDS {
+        return Err(GenerateError::Invalid(format!(
+            "{}: {:.2} s of music to dance to from --start; the model needs at least \
+             {MIN_SONG_SECONDS} s",
+            song.label,
+            span.seconds()
+        )));
+    }
     let known = common
         .edit
         .known(frames)?
@@ -208,6 +216,7 @@ fn edit(
         &grad_device,
         input.hook,
     )?;
+    check_finite(&done.frames)?;
     let mut motion =
         Edge151::decode(&done.frames).map_err(|e| GenerateError::Generation(e.to_string()))?;
     let made: Vec<bool> = (0..frames).map(|f| !known.kept(f)).collect();
@@ -328,17 +337,23 @@ fn generate_options(
 /// drifts against its legs, and one floor for the whole dance left its feet 0.2 m up in most
 /// of some), and no frame with a foot below it.
 fn to_smpl(frames: &[f32]) -> Result<SmplMotion, GenerateError> {
+    check_finite(frames)?;
+    let motion_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
+    let mut m = Edge151::decode(frames).map_err(|e| motion_err(&e))?;
+    m.put_feet_on_tracked_floor().map_err(|e| motion_err(&e))?;
+    keep_feet_above_floor(&mut m).map_err(GenerateError::Generation)?;
+    Ok(m)
+}
+
+/// A model output with a NaN or infinity is an error, not a dance.
+fn check_finite(frames: &[f32]) -> Result<(), GenerateError> {
     if frames.iter().any(|v| !v.is_finite()) {
         return Err(GenerateError::Generation(
             "the model produced non-finite values (please report this with the song and seed)"
                 .into(),
         ));
     }
-    let motion_err = |e: &dyn std::fmt::Display| GenerateError::Generation(e.to_string());
-    let mut m = Edge151::decode(frames).map_err(|e| motion_err(&e))?;
-    m.put_feet_on_tracked_floor().map_err(|e| motion_err(&e))?;
-    keep_feet_above_floor(&mut m).map_err(GenerateError::Generation)?;
-    Ok(m)
+    Ok(())
 }
 
 /// Lifts every frame whose lowest foot joint is below the floor (y = 0) onto it.
