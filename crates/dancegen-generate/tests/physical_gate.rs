@@ -268,7 +268,7 @@ fn group_gate(n: usize) {
 
 #[test]
 #[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 2 dancers, is not plausible yet: \
-            too few steps (step rate 0.16 and 0 against at least 0.33; jerk, floor and shins \
+            too few steps (step rate 0.16 and 0.04 against at least 0.33; jerk, floor and shins \
             pass); run with --ignored to see its figures"]
 fn group_tcdiffpp_small_is_plausible_for_2_dancers() {
     group_gate(2);
