@@ -5,7 +5,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, parse_joint_set};
+use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, KeyframePose, parse_joint_set};
+use dancegen_generate::formation_file::FormationFile;
 use dancegen_generate::record::DanceRecord;
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
 use dancegen_generate::systems::duet::{DuetOptions, DuetSampler, load_leader_at};
@@ -78,6 +79,10 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         }
         ("solo", None) => SystemRequest::Solo(solo_options(args)?),
         ("duet", Some(leader)) => SystemRequest::Duet(duet_options(args, leader)?),
+        ("duet", None) if recorded.is_some() => bail!(
+            "--edit {edit_name}: the follower of a duet; give the leader it dances with, \
+             --leader FILE"
+        ),
         ("duet", None) => bail!("the duet system dances with a leader: give --leader FILE"),
         ("group", Some(_)) => bail!("--leader makes a duet; the group system takes no leader"),
         ("group", None) => SystemRequest::Group(group_options(args)?),
@@ -165,7 +170,8 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
     };
     let keep_joints = match (&args.keep_joints, &args.from) {
         (Some(spec), Some(from)) => {
-            let (joints, root) = parse_joint_set(spec).map_err(anyhow::Error::msg)?;
+            let (joints, root) =
+                parse_joint_set("--keep-joints", spec).map_err(anyhow::Error::msg)?;
             Some(KeepJoints {
                 spec: spec.clone(),
                 joints,
@@ -179,6 +185,24 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
             })
         }
         _ => None,
+    };
+    let keyframes = args
+        .keyframe
+        .iter()
+        .map(|spec| KeyframePose::load(spec))
+        .collect::<Result<Vec<_>, _>>()?;
+    let keyframe_joints = match &args.keyframe_joints {
+        Some(spec) => Some((
+            spec.clone(),
+            parse_joint_set("--keyframe-joints", spec)
+                .map_err(anyhow::Error::msg)?
+                .0,
+        )),
+        None => None,
+    };
+    let path = match &args.path {
+        Some(p) => Some(FormationFile::read(p, "the --path")?),
+        None => None,
     };
     Ok(Request {
         song,
@@ -195,6 +219,10 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                 regenerate: args.regenerate.clone(),
                 continue_from,
                 keep_joints,
+                keyframes,
+                keyframe_joints,
+                keyframe_root: args.keyframe_root,
+                path,
             },
         },
         model,
@@ -271,8 +299,12 @@ fn edited_dance(args: &GenerateArgs) -> Result<Option<EditedDance>> {
         return Ok(None);
     };
     let record = DanceRecord::read(path)?;
+    // A duet's .npz holds its follower (dancer 1), which is what a duet edit makes anew; its
+    // leader comes with --leader.
+    let duet_follower = |r: &DanceRecord| r.system == "duet" && r.dancers == 2 && r.dancer == 1;
     if let Some(r) = &record
         && r.dancers > 1
+        && !duet_follower(r)
     {
         bail!(
             "--edit {}: dancer {} of a {}-dancer {} dance; editing one dancer of several is not \

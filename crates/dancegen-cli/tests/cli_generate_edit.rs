@@ -314,3 +314,185 @@ fn kept_joints_come_from_the_given_motion_and_unknown_joints_are_named() {
     );
     assert!(!dir.path().join("x.npy").exists());
 }
+
+#[test]
+fn a_keyframe_and_a_path_through_the_binary_and_their_bad_input_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    let make = |extra: &[&str], out: &str| {
+        let mut args = vec!["-q", "generate", s.as_str(), "--end", "12"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", out]);
+        dancegen(&args)
+    };
+    ok(&make(&["-o", &p("pose.npz")], &p("pose.npy")));
+    // Frame 90 of pose.npz, reached at 8 s with its floor position: every joint where it was.
+    ok(&make(
+        &[
+            "--keyframe",
+            &format!("{}:90@8", p("pose.npz")),
+            "--keyframe-root",
+            "--seed",
+            "2",
+        ],
+        &p("kf.npy"),
+    ));
+    let (_, pose) = npy(dir.path().join("pose.npy").as_path());
+    let (shape, kf) = npy(dir.path().join("kf.npy").as_path());
+    assert_eq!(shape, vec![360, 24, 3]);
+    let worst = (0..72)
+        .map(|i| (kf[240 * 72 + i] - pose[90 * 72 + i]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 0.03, "a keyframed joint is {worst} m off");
+    // A path: the pelvis follows it from 2 s to 9 s.
+    std::fs::write(
+        p("path.json"),
+        r#"{"keyframes": [{"t": 2, "positions": [[0, 0]]}, {"t": 9, "positions": [[1, -0.5]]}]}"#,
+    )
+    .unwrap();
+    ok(&make(&["--path", &p("path.json")], &p("path.npy")));
+    let (_, path) = npy(dir.path().join("path.npy").as_path());
+    let at = |f: usize| [path[f * 72], path[f * 72 + 2]];
+    let (start, end) = (at(60), at(270));
+    let miss = (start[0].hypot(start[1]), (end[0] - 1.0).hypot(end[1] + 0.5));
+    assert!(
+        miss.0 <= 0.1 && miss.1 <= 0.1,
+        "the path is missed by {miss:?} m"
+    );
+    // Bad input: named, nothing written.
+    let x = p("x.npy");
+    for (extra, words) in [
+        (
+            vec![
+                "--keyframe".to_string(),
+                format!("{}:9999@3", p("pose.npz")),
+            ],
+            vec!["--keyframe", "no frame 9999", "360"],
+        ),
+        (
+            vec!["--keyframe".to_string(), format!("{}@400", p("pose.npz"))],
+            vec!["--keyframe", "outside the song"],
+        ),
+        (
+            vec![
+                "--keyframe".to_string(),
+                format!("{}@3", p("pose.npz")),
+                "--start".to_string(),
+                "5".to_string(),
+            ],
+            vec!["--keyframe", "outside the danced part"],
+        ),
+        (
+            vec![
+                "--keyframe".to_string(),
+                format!("{}@3", p("pose.npz")),
+                "--keyframe-joints".to_string(),
+                "left_wrist,wing".to_string(),
+            ],
+            vec!["--keyframe-joints", "\"wing\""],
+        ),
+        (
+            vec!["--keyframe".to_string(), p("pose.npz")],
+            vec!["--keyframe", "no @T"],
+        ),
+        (vec!["--path".to_string(), p("pose.npy")], vec!["pose.npy"]),
+    ] {
+        let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+        let o = make(&extra, &x);
+        assert!(!o.status.success(), "{extra:?} succeeded");
+        let e = stderr(&o);
+        for w in words {
+            assert!(e.contains(w), "{extra:?}: {w:?} not in {e}");
+        }
+        assert!(!dir.path().join("x.npy").exists(), "{extra:?} wrote output");
+    }
+}
+
+#[test]
+fn a_duet_follower_is_edited_with_its_leader_given_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    let take = shared().join("data/cmu-salsa/60_13_scaled.bvh");
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        take.to_str().unwrap(),
+        "--source-fps",
+        "60",
+        "--to",
+        "smpl24",
+        "--fps",
+        "30",
+        "-o",
+        &p("lead.npz"),
+    ]));
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--leader",
+        &p("lead.npz"),
+        "-o",
+        &p("follower.npz"),
+        "-o",
+        &p("follower.npy"),
+    ]));
+    refused(
+        &[
+            "-q",
+            "generate",
+            "--edit",
+            &p("follower.npz"),
+            "--regenerate",
+            "5-9",
+            "-o",
+            &p("x.npy"),
+        ],
+        &["--edit", "follower.npz", "--leader FILE"],
+    );
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("follower.npz"),
+        "--leader",
+        &p("lead.npz"),
+        "--regenerate",
+        "5-9",
+        "--seed",
+        "2",
+        "-o",
+        &p("edited.npy"),
+    ]));
+    let (shape, a) = npy(dir.path().join("follower.npy").as_path());
+    let (shape2, b) = npy(dir.path().join("edited.npy").as_path());
+    assert_eq!(shape, shape2);
+    let per_frame = 72;
+    for f in (0..shape[0]).filter(|f| !(150..270).contains(f)) {
+        for i in 0..per_frame {
+            let k = f * per_frame + i;
+            assert!((a[k] - b[k]).abs() <= 1e-4, "frame {f} changed");
+        }
+    }
+    let moved = (150 * per_frame..270 * per_frame)
+        .map(|k| (a[k] - b[k]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.05, "the range is the old one ({moved} m)");
+    refused(
+        &[
+            "-q",
+            "generate",
+            &s,
+            "--leader",
+            &p("lead.npz"),
+            "--keyframe",
+            &format!("{}@3", p("follower.npz")),
+            "-o",
+            &p("x.npy"),
+        ],
+        &["--keyframe is not supported by --system duet"],
+    );
+    assert!(!dir.path().join("x.npy").exists());
+}

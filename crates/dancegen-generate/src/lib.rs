@@ -31,6 +31,7 @@
 pub mod beat_align;
 pub mod edit;
 pub mod error;
+pub mod formation_file;
 pub mod generator;
 pub mod models;
 pub mod output;

@@ -1,11 +1,13 @@
-//! Editing a solo dance through the library (issue 44): a range made new and a dance
-//! continued, on a held-out song with the shipped model, held to the issue's quality bounds:
-//! kept frames exactly kept, seamless joins, new motion that is new and on the beat.
+//! Editing a solo dance through the library (issue 44): a range made new, a dance continued,
+//! kept joints, a keyframe pose and a root path, on a held-out song with the shipped model,
+//! held to the issue's quality bounds: kept frames exactly kept, seamless joins, new motion
+//! that is new and on the beat, constraints met.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use dancegen_generate::edit::{Edit, GivenMotion};
+use dancegen_generate::edit::{Edit, GivenMotion, KeyframePose};
+use dancegen_generate::formation_file::FormationFile;
 use dancegen_generate::models::{Origin, SearchDir};
 use dancegen_generate::request::CommonOptions;
 use dancegen_generate::{CancelToken, Generator, ModelLocator, Request, Song, SystemRequest};
@@ -269,7 +271,8 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
 #[test]
 fn kept_legs_and_root_stay_and_the_upper_body_is_new() {
     let (original, _) = base();
-    let (joints_mask, root) = dancegen_generate::edit::parse_joint_set("lower").unwrap();
+    let (joints_mask, root) =
+        dancegen_generate::edit::parse_joint_set("--keep-joints", "lower").unwrap();
     let edit = Edit {
         keep_joints: Some(dancegen_generate::edit::KeepJoints {
             spec: "lower".into(),
@@ -326,5 +329,146 @@ fn kept_legs_and_root_stay_and_the_upper_body_is_new() {
     assert!(
         jerk_n <= 1.5 * jerk_o,
         "jerk {jerk_n:.0} against {jerk_o:.0}"
+    );
+}
+
+/// `--keyframe`: frame 100 of the base dance is to be reached at 75 s of the song (the
+/// dance's frame 450), with its floor position.
+fn keyframed(joints_set: Option<&str>, root: bool) -> SmplMotion {
+    let (original, _) = base();
+    let pose = KeyframePose {
+        spec: "base:100@75".into(),
+        t: 75.0,
+        pose: original.poses[100 * 72..101 * 72].to_vec(),
+        trans: [0, 1, 2].map(|c| original.trans[100 * 3 + c]),
+    };
+    let keyframe_joints = joints_set.map(|s| {
+        let (mask, _) = dancegen_generate::edit::parse_joint_set("--keyframe-joints", s).unwrap();
+        (s.to_string(), mask)
+    });
+    let edit = Edit {
+        keyframes: vec![pose],
+        keyframe_joints,
+        keyframe_root: root,
+        ..Edit::default()
+    };
+    run(&solo(4, 60.0, Some(89.0), edit)).0
+}
+
+#[test]
+fn a_keyframe_pose_is_reached_in_world_space_and_eased_into() {
+    let (original, _) = base();
+    let made = keyframed(None, true);
+    let (jo, jm) = (joints(original), joints(&made));
+    let worst = (0..24)
+        .map(|j| {
+            (0..3)
+                .map(|c| (jm[(450 * 24 + j) * 3 + c] - jo[(100 * 24 + j) * 3 + c]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    let ratio = dancegen_metrics::longform::boundary_jerk_ratio(&jm, 30.0, &[450]).unwrap();
+    let steps: Vec<f64> = (1..made.frames())
+        .map(|f| {
+            let d = |c: usize| f64::from(made.trans[f * 3 + c] - made.trans[(f - 1) * 3 + c]);
+            d(0).hypot(d(2))
+        })
+        .collect();
+    let near = steps[445..455].iter().copied().fold(0.0, f64::max);
+    let elsewhere = steps[..440].iter().copied().fold(0.0, f64::max);
+    eprintln!(
+        "keyframe: worst joint {worst:.4} m from the pose; boundary jerk ratio {ratio:?}; \
+         root step {near:.3} m near it, {elsewhere:.3} m elsewhere"
+    );
+    assert!(
+        worst <= 0.03,
+        "a keyframed joint is {worst:.3} m from its target"
+    );
+    let ratio = ratio.expect("a frame inside the dance");
+    assert!(
+        ratio < JOIN_JERK_RATIO_MAX,
+        "boundary jerk ratio {ratio:.2} at the keyframe"
+    );
+    assert!(
+        near <= elsewhere + 0.05,
+        "root step {near:.3} m at the keyframe"
+    );
+}
+
+#[test]
+fn keyframed_wrists_are_placed_by_their_arms_and_the_dance_keeps_its_own_height() {
+    let (original, _) = base();
+    let made = keyframed(Some("left_wrist,right_wrist"), false);
+    let (jo, jm) = (joints(original), joints(&made));
+    for j in [20, 21] {
+        let rel = |m: &[f64], f: usize, c: usize| m[(f * 24 + j) * 3 + c] - m[f * 24 * 3 + c];
+        let d = (0..3)
+            .map(|c| (rel(&jm, 450, c) - rel(&jo, 100, c)).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            d <= 1e-3,
+            "joint {j} is {d:.4} m from the pose around the pelvis"
+        );
+    }
+    // The legs were not given: the pelvis height is the dance's, the feet on the floor.
+    let feet = [7, 8, 10, 11].map(|j| jm[(450 * 24 + j) * 3 + 1]);
+    let low = feet.iter().copied().fold(f64::INFINITY, f64::min);
+    eprintln!(
+        "wrists: pelvis {:.3} m against the pose's {:.3} m; lowest foot {low:.3} m",
+        jm[450 * 72 + 1],
+        jo[100 * 72 + 1]
+    );
+    assert!(
+        low.abs() < 0.05,
+        "the lowest foot is {low:.3} m off the floor"
+    );
+}
+
+#[test]
+fn a_path_is_followed_and_the_dance_on_it_stays_whole() {
+    let json = r#"{"keyframes": [
+        {"t": 62, "positions": [[0, 0]]},
+        {"t": 70, "positions": [[1.5, 0.5]]},
+        {"t": 78, "positions": [[-1, 1]]}]}"#;
+    let file = FormationFile {
+        label: "path.json".into(),
+        json: json.into(),
+    };
+    let want = &file.parse(1, 1e9).unwrap().sample(30.0, 89 * 30)[0][60 * 30..];
+    let edit = Edit {
+        path: Some(file),
+        ..Edit::default()
+    };
+    let (made, _) = run(&solo(6, 60.0, Some(89.0), edit));
+    let (mut sum, mut n) = (0.0, 0);
+    for (f, p) in want.iter().enumerate() {
+        if let Some([x, z]) = *p {
+            sum += (f64::from(made.trans[f * 3]) - x).hypot(f64::from(made.trans[f * 3 + 2]) - z);
+            n += 1;
+        }
+    }
+    let mean = sum / n as f64;
+    let step = (1..made.frames())
+        .map(|f| {
+            let d = |c: usize| f64::from(made.trans[f * 3 + c] - made.trans[(f - 1) * 3 + c]);
+            d(0).hypot(d(2))
+        })
+        .fold(0.0, f64::max);
+    let jerk = |m: &SmplMotion| {
+        let v = dancegen_metrics::longform::mean_joint_jerk(&joints(m), 30.0).unwrap();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let (jerk_p, jerk_b) = (jerk(&made), jerk(&base().0));
+    eprintln!(
+        "path: {n} frames, mean distance {mean:.4} m; largest root step {step:.3} m; jerk \
+         {jerk_p:.0} against the plain dance's {jerk_b:.0}"
+    );
+    assert!(n > 400 && mean <= 0.1, "the path is missed by {mean:.3} m");
+    assert!(step <= 0.25, "a root step of {step:.3} m in a frame");
+    assert!(
+        jerk_p <= 1.5 * jerk_b,
+        "jerk {jerk_p:.0} against {jerk_b:.0}"
     );
 }

@@ -111,6 +111,21 @@ pub struct Inpainted {
     pub largest_join_correction_m: f32,
 }
 
+/// A made run `[a, b)` and where the generated root's floor position missed the known one
+/// (generated − known): at `a − 1`, at root-known frames inside the run (a keyframe's mark, a
+/// path) and at `b`, in frame order.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Run {
+    a: usize,
+    b: usize,
+    misses: Vec<(usize, [f32; 2])>,
+}
+
+/// Frames over which a generated run eases into the values known on some of its frames (a
+/// keyframe's pose): the difference at the known frame fades out (smoothstep) over this many
+/// frames on each side, or is interpolated between two known frames closer than twice it.
+pub const EASE_FRAMES: usize = 20;
+
 impl SoloModel {
     /// Generates what `known` leaves unknown, for `music` `[T, 35]` (the same frames).
     pub fn inpaint_hooked(
@@ -131,28 +146,29 @@ impl SoloModel {
         let all_known_root = (0..total).all(|f| known.root_known(f));
         let mut buf = known.values.clone();
         let mut done = known.mask.clone();
-        // The network's own root x/y at the frames just before and after each run.
-        let mut mismatch: Vec<(usize, usize, [f32; 2], [f32; 2])> = Vec::new();
+        let mut runs: Vec<Run> = Vec::new();
         for (wi, w) in plan.iter().enumerate() {
             let len = n.min(total - w.start);
             let frame = |f: usize| w.start + f.min(len - 1);
             let origin = ROOT_HORIZONTAL.map(|c| buf[w.start * DIMS + c]);
             let head = w.writes.start - w.start;
+            let window_root_known =
+                all_known_root || (w.start..w.start + len).all(|g| known.root_known(g));
             let mut prims = WindowPrimitives::empty(n);
             let mut cue_v = vec![0f32; n * DIMS];
             let mut cue_m = vec![0f32; n * DIMS];
             for f in 0..len {
                 let g = w.start + f;
-                if w.writes.contains(&g) {
-                    continue;
-                }
-                let with_root = f < head || all_known_root;
+                // Frames this window makes are cued in what is known of them (kept joints, a
+                // keyframe's pose); the frames around them in everything.
+                let in_run = w.writes.contains(&g);
+                let with_root = f < head || window_root_known;
                 let mut raw = buf[g * DIMS..(g + 1) * DIMS].to_vec();
                 for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
                     raw[c] -= origin[k];
                 }
                 let norm: Vec<f32> = (0..DIMS).map(|c| (raw[c] - shift[c]) / scale[c]).collect();
-                let full = (0..DIMS).all(|c| done[g * DIMS + c] > 0.0);
+                let full = !in_run && (0..DIMS).all(|c| done[g * DIMS + c] > 0.0);
                 if full {
                     prims.put(f, &norm, with_root);
                 }
@@ -200,18 +216,35 @@ impl SoloModel {
                     f[c] += origin[k];
                 }
             }
-            let root_at = |g: usize| ROOT_HORIZONTAL.map(|c| x[(g - w.start) * DIMS + c]);
-            let known_root = |buf: &[f32], g: usize| ROOT_HORIZONTAL.map(|c| buf[g * DIMS + c]);
-            let a = w.writes.start;
-            let run_starts = a == 0 || !needs[a - 1];
-            let b = w.writes.end;
-            let run_ends = b == total || !needs[b];
-            if run_starts {
-                let before = (a > w.start).then(|| {
-                    let (g, k) = (root_at(a - 1), known_root(&buf, a - 1));
-                    [g[0] - k[0], g[1] - k[1]]
-                });
-                mismatch.push((a, b, before.unwrap_or([f32::NAN; 2]), [f32::NAN; 2]));
+            let rel = w.writes.start - w.start..w.writes.end - w.start;
+            ease_into_known(&mut x[..span * DIMS], rel, |f, c| {
+                let i = (w.start + f) * DIMS + c;
+                (done[i] > 0.0).then_some(buf[i])
+            });
+            let miss = |g: usize| {
+                let i = g * DIMS;
+                let at = (g - w.start) * DIMS;
+                ROOT_HORIZONTAL.map(|c| x[at + c] - buf[i + c])
+            };
+            let (a, b) = (w.writes.start, w.writes.end);
+            if a == 0 || !needs[a - 1] {
+                let mut run = Run {
+                    a,
+                    b,
+                    misses: Vec::new(),
+                };
+                if a > w.start && known.root_known(a - 1) {
+                    run.misses.push((a - 1, miss(a - 1)));
+                }
+                runs.push(run);
+            }
+            let run = runs.last_mut().expect("a run is open");
+            run.b = b;
+            for g in w.writes.clone().filter(|&g| known.root_known(g)) {
+                run.misses.push((g, miss(g)));
+            }
+            if (b == total || !needs[b]) && b < w.start + len && known.root_known(b) {
+                run.misses.push((b, miss(b)));
             }
             for g in w.writes.clone() {
                 for c in 0..DIMS {
@@ -221,23 +254,16 @@ impl SoloModel {
                     }
                 }
             }
-            if let Some(last) = mismatch.last_mut() {
-                last.1 = b;
-                if run_ends && b < total && b < w.start + len && known.root_known(b) {
-                    let (g, k) = (root_at(b), known_root(&buf, b));
-                    last.3 = [g[0] - k[0], g[1] - k[1]];
-                }
-            }
             for g in w.writes.clone() {
                 done[g * DIMS..(g + 1) * DIMS].fill(1.0);
             }
         }
-        let largest = join_runs(&mut buf, known, &mismatch);
+        let largest = join_runs(&mut buf, known, &runs);
         if opts.foot_lock {
-            lock_feet_in_runs(&mut buf, known, &mismatch, opts);
+            lock_feet_in_runs(&mut buf, known, &runs, opts);
         }
-        for &(a, b, _, _) in &mismatch {
-            hand_over_root_velocity(&mut buf, known, a, b);
+        for r in &runs {
+            hand_over_root_velocity(&mut buf, known, r.a, r.b);
         }
         Ok(Inpainted {
             frames: buf,
@@ -247,34 +273,220 @@ impl SoloModel {
     }
 }
 
+/// Known frames on each side of a made run that [`join_made_runs`] blends it into.
+pub const JOIN_CONTEXT: usize = 8;
+
+/// Joins a dance that another sampler made whole in one pass (`generated`, raw EDGE-151
+/// frames `[T, 151]` in the same world as `known`, e.g. a duet's follower) to what `known`
+/// keeps, with the treatment the windows of [`SoloModel::inpaint_hooked`] get: each made run
+/// is blended into the kept frames around it (root onto the kept path at its start,
+/// rotations and height with their velocity, [`SeamBlend::Hermite`]), its root path ramped
+/// to meet the kept one at its end, the root velocity handed over at both ends, and partly
+/// known frames eased into. Returns the frames (known values exact) and the largest root
+/// move that joined a run.
+pub fn join_made_runs(generated: &[f32], known: &KnownFrames) -> (Vec<f32>, f32) {
+    let total = known.frames();
+    assert_eq!(
+        generated.len(),
+        total * DIMS,
+        "one generated frame per known one"
+    );
+    let needs: Vec<bool> = (0..total).map(|f| known.needs(f)).collect();
+    let mut buf = known.values.clone();
+    let mut runs = Vec::new();
+    let mut f = 0;
+    while f < total {
+        if !needs[f] {
+            f += 1;
+            continue;
+        }
+        let a = f;
+        while f < total && needs[f] {
+            f += 1;
+        }
+        let b = f;
+        let (head, tail) = (a.min(JOIN_CONTEXT), (total - b).min(JOIN_CONTEXT));
+        let (lo, hi) = (a - head, b + tail);
+        let mut x = generated[lo * DIMS..hi * DIMS].to_vec();
+        x[..head * DIMS].copy_from_slice(&known.values[lo * DIMS..a * DIMS]);
+        x[(b - lo) * DIMS..].copy_from_slice(&known.values[b * DIMS..hi * DIMS]);
+        // Without frames before it, the run keeps its own floor position (the seam
+        // treatment would start it at the origin).
+        let start = ROOT_HORIZONTAL.map(|c| x[c]);
+        anchor_windows_blended(
+            &mut x,
+            hi - lo,
+            &[CuedFrames { head, tail }],
+            SeamBlend::Hermite,
+        );
+        if head == 0 {
+            for row in x[..(b - lo) * DIMS].chunks_mut(DIMS) {
+                for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
+                    row[c] += start[k];
+                }
+            }
+        }
+        ease_into_known(&mut x, head..b - lo, |g, c| {
+            let i = (lo + g) * DIMS + c;
+            (known.mask[i] > 0.0).then_some(known.values[i])
+        });
+        let mut misses = Vec::new();
+        if a > 0 && known.root_known(a - 1) {
+            misses.push((a - 1, [0.0, 0.0]));
+        }
+        if b < total && known.root_known(b) && b - a >= 2 {
+            // Where the run's own root was heading at the kept frame after it.
+            let r = |g: usize| ROOT_HORIZONTAL.map(|c| x[(g - lo) * DIMS + c]);
+            let (p1, p2) = (r(b - 1), r(b - 2));
+            let want = ROOT_HORIZONTAL.map(|c| known.values[b * DIMS + c]);
+            misses.push((b, [0, 1].map(|k| 2.0 * p1[k] - p2[k] - want[k])));
+        }
+        for g in a..b {
+            for c in 0..DIMS {
+                let i = g * DIMS + c;
+                if known.mask[i] <= 0.0 {
+                    buf[i] = x[(g - lo) * DIMS + c];
+                }
+            }
+        }
+        runs.push(Run { a, b, misses });
+    }
+    let largest = join_runs(&mut buf, known, &runs);
+    for r in &runs {
+        hand_over_root_velocity(&mut buf, known, r.a, r.b);
+    }
+    (buf, largest)
+}
+
+/// Eases the made frames `run` of a window (`x`, raw frames) into the values known on some
+/// of them, channel by channel (not the root's floor position, which [`join_runs`] moves):
+/// the difference between the known value and the generated one at each such frame is added
+/// around it, fading out over [`EASE_FRAMES`] (smoothstep, so the motion's own velocity is
+/// kept at the known frame and at the fade's end), interpolated between two such frames that
+/// are close, and zero at the run's ends where it meets fully known frames (already joined by
+/// the seam blend).
+fn ease_into_known(
+    x: &mut [f32],
+    run: std::ops::Range<usize>,
+    known: impl Fn(usize, usize) -> Option<f32>,
+) {
+    let span = x.len() / DIMS;
+    let reach = EASE_FRAMES as f32;
+    let smooth = |u: f32| {
+        let u = u.clamp(0.0, 1.0);
+        u * u * (3.0 - 2.0 * u)
+    };
+    for c in (0..DIMS).filter(|c| !ROOT_HORIZONTAL.contains(c)) {
+        // The difference is taken against what the generated motion does across the known
+        // frames (a line between the frames on either side of each block of them): a hard
+        // cue on a lone frame makes the network put that frame right and leave its
+        // neighbours where they were, so the frame's own value says nothing.
+        let is_known: Vec<bool> = (0..span).map(|f| known(f, c).is_some()).collect();
+        let mut points: Vec<(usize, f32)> = Vec::new();
+        let mut f = run.start;
+        while f < run.end {
+            if !is_known[f] {
+                f += 1;
+                continue;
+            }
+            let p = f;
+            while f < run.end && is_known[f] {
+                f += 1;
+            }
+            let q = f;
+            let lo = p.checked_sub(1).map(|g| x[g * DIMS + c]);
+            let hi = (q < span).then(|| x[q * DIMS + c]);
+            for g in p..q {
+                let line = match (lo, hi) {
+                    (Some(a), Some(b)) => a + (b - a) * (g + 1 - p) as f32 / (q + 1 - p) as f32,
+                    (Some(a), None) => a,
+                    (None, Some(b)) => b,
+                    (None, None) => x[g * DIMS + c],
+                };
+                points.push((g, known(g, c).expect("a known frame") - line));
+            }
+        }
+        if points.is_empty() || points.len() == run.len() {
+            continue;
+        }
+        if run.start > 0 {
+            points.insert(0, (run.start - 1, 0.0));
+        }
+        if run.end < span {
+            points.push((run.end, 0.0));
+        }
+        let mut offset = vec![0f32; span];
+        for f in run.clone().filter(|&f| known(f, c).is_none()) {
+            let next = points.partition_point(|p| p.0 < f);
+            let before = next.checked_sub(1).map(|i| points[i]);
+            let after = points.get(next).copied();
+            offset[f] = match (before, after) {
+                (Some((f0, d0)), Some((f1, d1))) if (f1 - f0) as f32 <= 2.0 * reach => {
+                    d0 + (d1 - d0) * smooth((f - f0) as f32 / (f1 - f0) as f32)
+                }
+                _ => {
+                    let fade = |p: Option<(usize, f32)>| {
+                        p.map_or(0.0, |(g, d)| d * smooth(1.0 - g.abs_diff(f) as f32 / reach))
+                    };
+                    fade(before) + fade(after)
+                }
+            };
+        }
+        for f in run.clone() {
+            match known(f, c) {
+                Some(v) => x[f * DIMS + c] = v,
+                None => x[f * DIMS + c] += offset[f],
+            }
+        }
+    }
+}
+
 /// Known frames on each side of a run that the foot lock sees with it.
 pub const FOOT_LOCK_CONTEXT: usize = 30;
 
 /// The whole-dance sampler's foot lock (root lock, then leg IK) on each made run, with
 /// [`FOOT_LOCK_CONTEXT`] known frames on each side so that its feet continue the planted
-/// ones there. Only the run's frames are written back; the root path the lock moved is joined
-/// to the known one again as in [`join_runs`].
-fn lock_feet_in_runs(
-    buf: &mut [f32],
-    known: &KnownFrames,
-    runs: &[(usize, usize, [f32; 2], [f32; 2])],
-    opts: &GenerateOptions,
-) {
+/// ones there. Only the run's frames are written back. Known root positions stay: the root
+/// path the lock moved is joined to them again as in [`join_runs`] before the legs are
+/// pinned on it.
+fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], opts: &GenerateOptions) {
     let total = buf.len() / DIMS;
-    for &(a, b, _, _) in runs {
+    for r in runs {
+        let (a, b) = (r.a, r.b);
         let lo = a.saturating_sub(FOOT_LOCK_CONTEXT);
         let hi = (b + FOOT_LOCK_CONTEXT).min(total);
         let mut seg = buf[lo * DIMS..hi * DIMS].to_vec();
         crate::planted_feet::lock_planted_feet_with(&mut seg, opts.foot_lock_rule);
-        if opts.foot_ik {
-            crate::planted_feet::pin_planted_feet_with(&mut seg, opts.foot_lock_rule);
+        let moved = |seg: &[f32], g: usize| {
+            ROOT_HORIZONTAL.map(|c| seg[(g - lo) * DIMS + c] - buf[g * DIMS + c])
+        };
+        let mut misses = Vec::new();
+        if a > lo {
+            misses.push((a - 1, moved(&seg, a - 1)));
         }
-        let moved =
-            |g: usize| ROOT_HORIZONTAL.map(|c| seg[(g - lo) * DIMS + c] - buf[g * DIMS + c]);
-        let before = if a > lo { moved(a - 1) } else { [f32::NAN; 2] };
-        let after = if b < hi { moved(b) } else { [f32::NAN; 2] };
+        for g in (a..b).filter(|&g| known.root_known(g)) {
+            misses.push((g, moved(&seg, g)));
+            for &c in &ROOT_HORIZONTAL {
+                seg[(g - lo) * DIMS + c] = buf[g * DIMS + c];
+            }
+        }
+        if b < hi {
+            misses.push((b, moved(&seg, b)));
+        }
         buf[a * DIMS..b * DIMS].copy_from_slice(&seg[(a - lo) * DIMS..(b - lo) * DIMS]);
-        join_runs(buf, known, &[(a, b, before, after)]);
+        join_runs(buf, known, &[Run { a, b, misses }]);
+        // The legs are pinned on the root path as it now is, known parts included.
+        if opts.foot_ik {
+            let mut seg = buf[lo * DIMS..hi * DIMS].to_vec();
+            crate::planted_feet::pin_planted_feet_with(&mut seg, opts.foot_lock_rule);
+            buf[a * DIMS..b * DIMS].copy_from_slice(&seg[(a - lo) * DIMS..(b - lo) * DIMS]);
+        }
+        // The lock moved known channels of the run too (a keyframe's legs): back to their
+        // values, eased in as the sampler's output was.
+        ease_into_known(&mut buf[lo * DIMS..hi * DIMS], a - lo..b - lo, |f, c| {
+            let i = (lo + f) * DIMS + c;
+            (known.mask[i] > 0.0).then_some(known.values[i])
+        });
     }
 }
 
@@ -314,32 +526,27 @@ fn hand_over_root_velocity(buf: &mut [f32], known: &KnownFrames, a: usize, b: us
     }
 }
 
-/// Moves each generated run `[a, b)` whose root was not known onto the known path: by the
-/// mismatch before it at `a`, the one after it at `b`, and a linear ramp between (one of
-/// them alone where the other side has no known frame). Returns the largest move.
-fn join_runs(
-    buf: &mut [f32],
-    known: &KnownFrames,
-    runs: &[(usize, usize, [f32; 2], [f32; 2])],
-) -> f32 {
+/// Moves the frames of each generated run whose root was not known onto the known path:
+/// by the misses measured around and inside it, linearly interpolated between the nearest
+/// two (the nearest one alone before the first and after the last). Returns the largest
+/// move.
+fn join_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run]) -> f32 {
     let mut largest = 0f32;
-    for &(a, b, before, after) in runs {
-        let (before, after) = match (before[0].is_finite(), after[0].is_finite()) {
-            (true, true) => (before, after),
-            (true, false) => (before, before),
-            (false, true) => (after, after),
-            (false, false) => continue,
-        };
-        let span = (b - a + 1) as f32;
-        for g in a..b {
-            if known.root_known(g) {
-                continue;
-            }
-            let u = (g - a + 1) as f32 / span;
+    for r in runs.iter().filter(|r| !r.misses.is_empty()) {
+        let m = &r.misses;
+        for g in (r.a..r.b).filter(|&g| !known.root_known(g)) {
+            let next = m.partition_point(|p| p.0 < g);
+            let d = match (next.checked_sub(1).map(|i| m[i]), m.get(next)) {
+                (Some((f0, d0)), Some(&(f1, d1))) => {
+                    let u = (g - f0) as f32 / (f1 - f0) as f32;
+                    [0, 1].map(|k| d0[k] + (d1[k] - d0[k]) * u)
+                }
+                (Some((_, d)), None) | (None, Some(&(_, d))) => d,
+                (None, None) => unreachable!("misses is not empty"),
+            };
             for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
-                let d = before[k] + (after[k] - before[k]) * u;
-                buf[g * DIMS + c] -= d;
-                largest = largest.max(d.abs());
+                buf[g * DIMS + c] -= d[k];
+                largest = largest.max(d[k].abs());
             }
         }
     }
@@ -425,9 +632,119 @@ mod tests {
             values: buf.clone(),
             mask,
         };
-        let largest = join_runs(&mut buf, &known, &[(1, 5, [0.0, 0.0], [5.0, -5.0])]);
+        let run = Run {
+            a: 1,
+            b: 5,
+            misses: vec![(0, [0.0, 0.0]), (5, [5.0, -5.0])],
+        };
+        let largest = join_runs(&mut buf, &known, &[run]);
         let x: Vec<f32> = (0..t).map(|g| buf[g * DIMS + ROOT_HORIZONTAL[0]]).collect();
         assert_eq!(x, vec![0.0, -1.0, -2.0, -3.0, -4.0, 0.0]);
         assert_eq!(largest, 4.0);
+    }
+
+    #[test]
+    fn join_runs_passes_through_a_known_mark_inside_the_run() {
+        let t = 11;
+        let mut buf = vec![0f32; t * DIMS];
+        let mut mask = vec![0f32; t * DIMS];
+        mask[..DIMS].fill(1.0);
+        for &c in &ROOT_HORIZONTAL {
+            mask[5 * DIMS + c] = 1.0;
+        }
+        let known = KnownFrames {
+            values: buf.clone(),
+            mask,
+        };
+        let run = Run {
+            a: 1,
+            b: t,
+            misses: vec![(0, [0.0, 0.0]), (5, [2.5, 0.0])],
+        };
+        join_runs(&mut buf, &known, &[run]);
+        let x: Vec<f32> = (0..t).map(|g| buf[g * DIMS + ROOT_HORIZONTAL[0]]).collect();
+        // Ramped to the mark, the mark itself left to the splice, then held after it.
+        assert_eq!(
+            x,
+            [
+                0.0, -0.5, -1.0, -1.5, -2.0, 0.0, -2.5, -2.5, -2.5, -2.5, -2.5
+            ]
+        );
+    }
+
+    #[test]
+    fn a_run_eases_into_a_value_known_on_one_frame_and_keeps_its_ends() {
+        let span = 120;
+        let c = 40;
+        let mut x = vec![0f32; span * DIMS];
+        for f in 0..span {
+            x[f * DIMS + c] = f as f32 * 0.01;
+        }
+        let original = x.clone();
+        ease_into_known(&mut x, 10..110, |f, ch| (f == 60 && ch == c).then_some(3.0));
+        let v = |f: usize| x[f * DIMS + c];
+        assert_eq!(v(60), 3.0);
+        let d = |f: usize| v(f) - original[f * DIMS + c];
+        // The difference against the line through the neighbours (0.60), in full next to the
+        // keyframe and fading with zero slope at both ends of the reach.
+        assert!((d(59) - d(61)).abs() < 1e-5 && (d(59) - 2.4 * 0.99275).abs() < 1e-3);
+        assert!(d(60 - EASE_FRAMES).abs() < 1e-6 && d(60 + EASE_FRAMES).abs() < 1e-6);
+        assert!(d(60 - EASE_FRAMES + 1) > 0.0 && d(60 - EASE_FRAMES + 1) < 0.03);
+        // The generated motion's own velocity carries through the keyframe.
+        assert!(((v(61) - v(59)) / 2.0 - 0.01).abs() < 1e-4);
+        // Outside the run, and in the other channels, nothing moved.
+        assert_eq!(x[..10 * DIMS], original[..10 * DIMS]);
+        assert_eq!(x[110 * DIMS..], original[110 * DIMS..]);
+        assert!((0..span).all(|f| x[f * DIMS + c + 1] == original[f * DIMS + c + 1]));
+    }
+
+    #[test]
+    fn a_value_known_near_the_runs_edge_is_interpolated_from_the_edge_not_cut_off() {
+        let span = 40;
+        let c = 40;
+        let mut x = vec![0f32; span * DIMS];
+        ease_into_known(&mut x, 5..35, |f, ch| (f == 10 && ch == c).then_some(1.0));
+        let v: Vec<f32> = (0..span).map(|f| x[f * DIMS + c]).collect();
+        assert_eq!(v[4], 0.0, "the fully known frame before the run");
+        assert_eq!(v[10], 1.0);
+        // Smoothstep from 0 at frame 4 to 1 at frame 10: rising, no jump at the edge.
+        assert!(v[5] > 0.0 && v[5] < 0.1 && v[5..=10].windows(2).all(|w| w[1] > w[0]));
+    }
+
+    #[test]
+    fn a_whole_generated_dance_is_joined_to_the_kept_frames_without_a_step() {
+        // Kept: frames 0..20 and 60..80, walking along x at 1 cm a frame. Generated: the same
+        // walk 0.5 m off and at 2 cm a frame.
+        let t = 80;
+        let mut known = vec![0f32; t * DIMS];
+        let mut generated = vec![0f32; t * DIMS];
+        let mut mask = vec![0f32; t * DIMS];
+        for f in 0..t {
+            known[f * DIMS + ROOT_HORIZONTAL[0]] = 0.01 * f as f32;
+            generated[f * DIMS + ROOT_HORIZONTAL[0]] = 0.5 + 0.02 * f as f32;
+            if !(20..60).contains(&f) {
+                mask[f * DIMS..(f + 1) * DIMS].fill(1.0);
+            }
+        }
+        let known = KnownFrames {
+            values: known,
+            mask,
+        };
+        let (out, largest) = join_made_runs(&generated, &known);
+        let x: Vec<f32> = (0..t).map(|f| out[f * DIMS + ROOT_HORIZONTAL[0]]).collect();
+        for f in (0..20).chain(60..80) {
+            assert_eq!(
+                x[f],
+                known.values[f * DIMS + ROOT_HORIZONTAL[0]],
+                "kept frame {f}"
+            );
+        }
+        let steps: Vec<f32> = x.windows(2).map(|w| w[1] - w[0]).collect();
+        let worst = steps.iter().fold(0f32, |m, s| m.max(s.abs()));
+        assert!(worst < 0.05, "a root step of {worst} m (steps {steps:?})");
+        assert!(
+            largest > 0.0 && largest < 0.5,
+            "largest join move {largest}"
+        );
     }
 }

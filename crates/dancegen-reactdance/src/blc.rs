@@ -16,6 +16,10 @@
 //!
 //! Guidance is LDCFG: level `r`'s channels get `x̂0 = (1 + s_r)·cond − s_r·uncond`
 //! ([`Guidance::PerChannel`]); all `s_r = 0` skips the unconditional branch.
+//!
+//! **Editing** ([`LatentCue`]): tokens whose value is known (the latent of the frames an edit
+//! keeps) are hard cues, noised to each step's level, in either sampler; the rest is generated
+//! to go with them (diffusion inpainting).
 
 use dancegen_nn::burn;
 use dancegen_nn::diffusion::{
@@ -24,7 +28,7 @@ use dancegen_nn::diffusion::{
 };
 use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
 
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 
 use crate::denoiser::{DuetCond, LatentDenoiser, Layout, PreparedDenoiser};
 
@@ -47,6 +51,52 @@ pub struct LatentSampling {
     pub guidance: Vec<f64>,
     pub seed: u64,
     pub long_form: LongForm,
+}
+
+/// Known tokens of the latent being sampled (an edit): `value` `[K, C]` row-major, and
+/// `known[i]` whether token `i`'s value is imposed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LatentCue {
+    pub value: Vec<f32>,
+    pub known: Vec<bool>,
+}
+
+impl LatentCue {
+    /// The cue over tokens `start..start + len` as `[1, len, C]` tensors (tokens past the end
+    /// repeat the last one's, as [`to_blocks`] pads), or `None` if none of them is known.
+    fn window(&self, start: usize, len: usize, c: usize, device: &Device) -> Option<Cue> {
+        let k = self.known.len();
+        let at = |i: usize| (start + i).min(k - 1);
+        if !(0..len).any(|i| self.known[at(i)]) {
+            return None;
+        }
+        let mut value = vec![0f32; len * c];
+        let mut mask = vec![0f32; len * c];
+        for i in 0..len {
+            let g = at(i);
+            if self.known[g] {
+                value[i * c..(i + 1) * c].copy_from_slice(&self.value[g * c..(g + 1) * c]);
+                mask[i * c..(i + 1) * c].fill(1.0);
+            }
+        }
+        Some(Cue {
+            value: Tensor::from_data(TensorData::new(value, [1, len, c]), device),
+            mask: Tensor::from_data(TensorData::new(mask, [1, len, c]), device),
+            noised: true,
+            activity: CueActivity::Hard,
+        })
+    }
+
+    /// The cue over every block of [`to_blocks`] (`[nb, block, C]`).
+    fn blocks(&self, block: usize, c: usize, device: &Device) -> Option<Cue> {
+        let nb = self.known.len().div_ceil(block);
+        let cue = self.window(0, nb * block, c, device)?;
+        Some(Cue {
+            value: cue.value.reshape([nb, block, c]),
+            mask: cue.mask.reshape([nb, block, c]),
+            ..cue
+        })
+    }
 }
 
 /// The LDCFG guidance of `levels` levels of `level_dim` channels.
@@ -139,7 +189,31 @@ pub fn sample_latent_hooked(
     device: &Device,
     hook: &dyn StepHook,
 ) -> Result<Tensor<3>, Cancelled> {
+    sample_latent_cued_hooked(net, schedule, c, latent_dim, levels, s, None, device, hook)
+}
+
+/// [`sample_latent_hooked`] with the tokens `cue` knows imposed (an edit).
+#[allow(clippy::too_many_arguments)]
+pub fn sample_latent_cued_hooked(
+    net: &LatentDenoiser,
+    schedule: &Schedule,
+    c: &DuetCond,
+    latent_dim: usize,
+    levels: usize,
+    s: &LatentSampling,
+    cue: Option<&LatentCue>,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Tensor<3>, Cancelled> {
     let k = c.leader.dims()[1];
+    if let Some(cue) = cue {
+        assert_eq!(cue.known.len(), k, "one cue entry per token");
+        assert_eq!(
+            cue.value.len(),
+            k * latent_dim,
+            "a cue value per token and channel"
+        );
+    }
     let t = net.block_tokens;
     let guidance = level_guidance(&s.guidance, levels, latent_dim / levels);
     let guided = !matches!(guidance, Guidance::Conditional);
@@ -147,12 +221,15 @@ pub fn sample_latent_hooked(
         let blocks = cond_blocks(c, t);
         let nb = blocks.leader.dims()[0];
         let model = PreparedDenoiser::new(net, &blocks, guided, Layout::Batched);
+        let mut opts = options(s, guidance, s.seed);
+        opts.cues
+            .extend(cue.and_then(|q| q.blocks(t, latent_dim, device)));
         let x = sample_hooked(
             &model,
             schedule,
             [nb, t, latent_dim],
             Some(&blocks),
-            &options(s, guidance, s.seed),
+            &opts,
             device,
             hook,
         )?;
@@ -170,6 +247,8 @@ pub fn sample_latent_hooked(
         let w = cond_window(c, st, t);
         let model = PreparedDenoiser::new(net, &w, guided, Layout::Batched);
         let mut opts = options(s, guidance.clone(), s.seed.wrapping_add(i as u64));
+        opts.cues
+            .extend(cue.and_then(|q| q.window(st, t, latent_dim, device)));
         if let Some(prev) = &out {
             let known = prev.dims()[1] - st;
             let mut value = prev.clone().narrow(1, st, known);

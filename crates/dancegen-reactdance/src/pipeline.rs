@@ -11,6 +11,11 @@
 //!    places the follower from a learned relative position, and at partner distance its
 //!    centimetre errors put trunks through each other (docs/duet-eval.md measures both).
 //!
+//! **Editing** ([`KnownFollower`]): the frames of the follower an edit keeps are encoded by the
+//! HFSQ encoder, and the tokens they alone decide are hard cues to the latent sampler
+//! ([`crate::blc::LatentCue`]); the rest of the latent is generated to go with them. The
+//! caller joins the decoded follower to the kept frames and keeps them exactly.
+//!
 //! Heights are relative to the leader's floor (where its planted feet rest,
 //! [`planted_floor_height`], as the training couples were grounded): the model was trained on
 //! couples standing on y = 0, and a leader recorded with another floor height gets a follower on
@@ -25,7 +30,7 @@ use dancegen_nn::diffusion::{BetaSchedule, Schedule};
 use dancegen_nn::progress::{Cancelled, NoHook, StepHook};
 use dancegen_refine::couple_separation::{SeparationConfig, separation_offsets};
 
-use crate::blc::{LatentSampling, sample_latent_hooked};
+use crate::blc::{LatentCue, LatentSampling, sample_latent_cued_hooked};
 use crate::bundle::DuetModel;
 use crate::config::MUSIC_DIMS;
 use crate::denoiser::DuetCond;
@@ -121,6 +126,32 @@ pub fn generate_follower_hooked(
     device: &Device,
     hook: &dyn StepHook,
 ) -> Result<Generated, FollowerError> {
+    generate_follower_known(
+        model, leader, music, sampling, separation, None, device, hook,
+    )
+}
+
+/// What an edit keeps of the follower: `motion` (the leader's length, in the leader's world
+/// frame; any values on frames not kept) and, per frame, whether it is `kept`.
+pub struct KnownFollower<'a> {
+    pub motion: &'a SmplMotion,
+    pub kept: &'a [bool],
+}
+
+/// [`generate_follower_hooked`] for an edit: the latent tokens that only `known`'s kept
+/// frames decide are imposed (module documentation). The result is the model's whole
+/// follower; the caller joins it to the kept frames.
+#[allow(clippy::too_many_arguments)]
+pub fn generate_follower_known(
+    model: &DuetModel,
+    leader: &SmplMotion,
+    music: &[f32],
+    sampling: &LatentSampling,
+    separation: Option<&SeparationConfig>,
+    known: Option<&KnownFollower<'_>>,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Generated, FollowerError> {
     let t = leader.frames();
     if t == 0 {
         return Err(FollowerError::Invalid("the leader has no frames".into()));
@@ -166,13 +197,18 @@ pub fn generate_follower_hooked(
     };
     let schedule = Schedule::new(BetaSchedule::Cosine, model.config.denoiser.timesteps);
     let t0 = Instant::now();
-    let latent = sample_latent_hooked(
+    let cue = match known {
+        Some(k) => Some(latent_cue(model, leader, floor, k, frames, device)?),
+        None => None,
+    };
+    let latent = sample_latent_cued_hooked(
         &model.denoiser,
         &schedule,
         &cond,
         ae.latent_dim(),
         ae.num_levels,
         sampling,
+        cue.as_ref(),
         device,
         hook,
     )?;
@@ -234,5 +270,65 @@ pub fn generate_follower_hooked(
         rotations_bridged,
         separation_max_m,
         separate_s: t2.elapsed().as_secs_f64(),
+    })
+}
+
+/// The latent cue of an edit: the kept follower (grounded as the leader was, by `floor`)
+/// encoded to the latent, and the tokens all of whose frames, and one token's worth on each
+/// side (the codec's convolutions see their neighbours), are kept.
+fn latent_cue(
+    model: &DuetModel,
+    leader: &SmplMotion,
+    floor: f32,
+    known: &KnownFollower<'_>,
+    frames: usize,
+    device: &Device,
+) -> Result<LatentCue, FollowerError> {
+    let t = leader.frames();
+    if known.motion.frames() != t || known.kept.len() != t {
+        return Err(FollowerError::Invalid(format!(
+            "the kept follower has {} frames for a {t}-frame leader",
+            known.motion.frames()
+        )));
+    }
+    let mut follower = known.motion.clone();
+    for p in follower.trans.chunks_exact_mut(3) {
+        p[1] -= floor;
+    }
+    let mut data = DuetFollower::encode(&follower, leader, model.config.heading_sigma)
+        .map_err(|e| e.to_string())?;
+    let (fm, fs) = (
+        &model.norm.mean[..DuetFollower::DIMS],
+        &model.norm.std[..DuetFollower::DIMS],
+    );
+    for row in data.chunks_exact_mut(DuetFollower::DIMS) {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = ((f64::from(*v) - fm[j]) / fs[j]) as f32;
+        }
+    }
+    let data = pad_frames(&data, DuetFollower::DIMS, frames);
+    let x = Tensor::from_data(
+        TensorData::new(data, [1, frames, DuetFollower::DIMS]),
+        device,
+    );
+    let latent = model.autoencoder.encode(x);
+    let [_, k, _] = latent.dims();
+    let value = latent
+        .into_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .map_err(|e| format!("encoded follower: {e:?}"))?;
+    let f = model.config.autoencoder.frames_per_token();
+    let kept = |g: usize| known.kept[g.min(t - 1)];
+    let known_tokens = (0..k)
+        .map(|i| {
+            let lo = (i * f).saturating_sub(f);
+            let hi = ((i + 2) * f).min(frames);
+            (lo..hi).all(kept)
+        })
+        .collect();
+    Ok(LatentCue {
+        value,
+        known: known_tokens,
     })
 }

@@ -70,12 +70,6 @@ pub struct GenerateArgs {
     /// the model search path: `dancegen models` shows it).
     #[arg(long, value_name = "DIR")]
     pub model: Option<PathBuf>,
-    /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
-    /// It needs joint rotations: a solo dance for it is a `generate -o leader.npz` (or .bvh),
-    /// not the joint positions of `.npy`.
-    /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
-    /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
-    /// which hold the follower.
     /// Edit this dance: keep it, except the --regenerate ranges, which are made new to join
     /// it. A .npz that dancegen wrote records its song, --start, system, model and seed, and
     /// they are used unless given; any other motion `convert` reads needs SONG (and --start
@@ -103,6 +97,33 @@ pub struct GenerateArgs {
     /// salsa BVHs, whose headers say 120).
     #[arg(long, value_name = "FPS", requires = "from", value_parser = parse_source_fps)]
     pub from_fps: Option<f64>,
+    /// Reach a pose at a time: POSE@T, where POSE is a motion file `convert` reads (its first
+    /// frame, or frame N with POSE:N) and T is seconds of the song (repeatable). Its joints
+    /// are matched in world space on that frame; the dance eases in and out of it. The dancer
+    /// stays where it is on the floor unless --keyframe-root.
+    #[arg(long, value_name = "POSE@T")]
+    pub keyframe: Vec<String>,
+    /// The joints the keyframes place (as --keep-joints names them; default all). Each
+    /// named joint's chain from the pelvis takes the pose's rotations, so that the joint is
+    /// where the pose has it around the pelvis. With both legs named, the pelvis takes the
+    /// pose's height too; without them it keeps the dance's height, so that the dance's own
+    /// legs still stand on the floor.
+    #[arg(long, value_name = "SET", requires = "keyframe")]
+    pub keyframe_joints: Option<String>,
+    /// The keyframes' floor position is reached too (the pose file's pelvis x, z).
+    #[arg(long, requires = "keyframe")]
+    pub keyframe_root: bool,
+    /// The dancer's root follows keyframed floor positions: a FORMATION.json of one dancer
+    /// ({"keyframes": [{"t": 0, "positions": [[x, z]]}, ...]}, seconds of the song, metres,
+    /// x to the audience's right, +z towards the audience).
+    #[arg(long, value_name = "PATH.json")]
+    pub path: Option<PathBuf>,
+    /// Duet: the leader's motion (any format `convert` reads; BVH is retargeted to SMPL 24).
+    /// It needs joint rotations: a solo dance for it is a `generate -o leader.npz` (or .bvh),
+    /// not the joint positions of `.npy`.
+    /// The follower gets the leader's length at 30 fps, in the leader's world frame; outputs
+    /// hold both dancers (leader unchanged), except single-dancer formats (.bvh, .npz, .npy)
+    /// which hold the follower.
     #[arg(long, value_name = "FILE")]
     pub leader: Option<PathBuf>,
     /// Duet: the rate the leader was captured at, whatever its file's header says (the frames

@@ -7,17 +7,21 @@
 
 use std::path::Path;
 
+use dancegen_lodgepp::inpaint::{KnownFrames, join_made_runs};
 use dancegen_lodgepp::planted_feet::{PlantedRule, lock_planted_feet_leashed};
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 use dancegen_reactdance::blc::{LatentSampling, LongForm};
 use dancegen_reactdance::bundle::DuetModel;
-use dancegen_reactdance::pipeline::{FollowerError, generate_follower_hooked, separate_follower};
+use dancegen_reactdance::pipeline::{
+    FollowerError, KnownFollower, generate_follower_hooked, generate_follower_known,
+    separate_follower,
+};
 use dancegen_refine::couple_separation::SeparationConfig;
 
 use crate::beat_align::align_follower_to_leader;
-use crate::edit::GivenMotion;
+use crate::edit::{self, GivenMotion};
 use crate::error::GenerateError;
 use crate::song::{FPS, Span};
 use crate::system::CommonOptions;
@@ -155,6 +159,7 @@ impl DanceSystem for Duet {
     const MODEL_KIND: &'static str = dancegen_reactdance::bundle::KIND;
     const DEFAULT_MODEL: &'static str = "reactdance-small";
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
+    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE];
 
     type Model = DuetModel;
     type Options = DuetOptions;
@@ -238,6 +243,9 @@ impl DanceSystem for Duet {
             long_form,
         };
         let separation = duet.separation.then(SeparationConfig::default);
+        if !common.edit.is_empty() {
+            return edit_follower(model, &input, span, &sampling, separation.as_ref());
+        }
         let foot_lock = (duet.foot_lock && model.config.sampling.foot_lock)
             .then_some(model.config.sampling.foot_lock_leash_frames);
         // Post-processing order: foot lock, beat alignment, separation (the separation runs
@@ -341,6 +349,106 @@ impl DanceSystem for Duet {
 /// on a leash of `leash_frames`: the follower's place comes from the model, beside the leader,
 /// and an unleashed lock would carry it away by every glide it removes. No leg IK: pinning each
 /// contact run's feet raised MPJPE by 40 mm on training and held-out couples alike
+/// An edit of the follower (`--edit FOLLOWER --regenerate A-B`, `--continue-from`): the
+/// latent tokens of the kept frames are hard cues to the sampler
+/// ([`dancegen_reactdance::pipeline::generate_follower_known`]), the new frames are joined to
+/// the kept ones as the solo system's are ([`join_made_runs`]) and the kept frames are the
+/// input's exactly. The separation runs on the model's follower before the join; the foot
+/// lock and the beat warp are not applied (both move kept frames).
+fn edit_follower(
+    model: &DuetModel,
+    input: &DanceInput<'_, DuetOptions>,
+    span: Span,
+    sampling: &LatentSampling,
+    separation: Option<&SeparationConfig>,
+) -> Result<Dance, GenerateError> {
+    let (common, duet, song) = (input.common, input.options, input.song);
+    let leader = &duet.leader;
+    let t = leader.frames();
+    if let Some(b) = &common.edit.base
+        && b.motion.frames() != t
+    {
+        return Err(GenerateError::Invalid(format!(
+            "--edit {}: the follower has {} frames but the leader {} has {t}; give the \
+             leader it was made with",
+            b.label,
+            b.motion.frames(),
+            duet.leader_label
+        )));
+    }
+    let known = common
+        .edit
+        .known(&span, song.seconds())?
+        .expect("a non-empty edit knows something");
+    let kept: Vec<bool> = (0..t).map(|f| known.kept(f)).collect();
+    let out = generate_follower_known(
+        model,
+        leader,
+        song.music(&span),
+        sampling,
+        separation,
+        Some(&KnownFollower {
+            motion: &known.motion,
+            kept: &kept,
+        }),
+        input.device,
+        input.hook,
+    )
+    .map_err(|e| match e {
+        FollowerError::Cancelled(_) => GenerateError::Cancelled,
+        FollowerError::Invalid(why) => {
+            GenerateError::Generation(format!("generating the follower: {why}"))
+        }
+    })?;
+    let generated = Edge151::encode(&out.follower)
+        .map_err(|e| GenerateError::Generation(format!("encoding the follower: {e}")))?;
+    let (values, mask) = known.edge151()?;
+    let (frames, largest) = join_made_runs(&generated, &KnownFrames { values, mask });
+    let mut follower =
+        Edge151::decode(&frames).map_err(|e| GenerateError::Generation(e.to_string()))?;
+    known.splice(&mut follower);
+    let new = known.frames_to_make();
+    let fps = f64::from(FPS);
+    Ok(Dance {
+        dancers: vec![
+            Dancer {
+                role: Role::Leader,
+                motion: leader.clone(),
+            },
+            Dancer {
+                role: Role::Follower,
+                motion: follower,
+            },
+        ],
+        span,
+        summary: format!(
+            "follower of {} ({t} frames, {:.1} s at {FPS} fps), {new} of them new ({:.1} s), \
+             seed {}",
+            duet.leader_label,
+            t as f64 / fps,
+            new as f64 / fps,
+            common.seed,
+        ),
+        timing_breakdown: format!(
+            "sampling {:.2} s, decoding {:.2} s; ",
+            out.sample_s, out.decode_s
+        ),
+        notes: vec![format!(
+            "an edit: the kept frames are the input's; the new ones join them (root moved by \
+             at most {largest:.2} m to meet the kept path); no foot lock or beat warp{}",
+            match separation {
+                Some(_) => format!(
+                    "; the model's follower separated from the leader by up to {:.0} mm",
+                    out.separation_max_m * 1000.0
+                ),
+                None => String::new(),
+            }
+        )],
+        group: None,
+        holistic: None,
+    })
+}
+
 /// (docs/solo-data-v2.md, round eight).
 fn lock_follower_feet(
     follower: &mut SmplMotion,

@@ -17,7 +17,6 @@ use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
 use dancegen_nn::progress::DENOISING;
 use dancegen_refine::couple_separation::{SeparationConfig, group_separation_offsets};
-use dancegen_refine::formation::keyframes::Formation;
 use dancegen_refine::formation::{StagePos, order_left_to_right};
 use dancegen_tcdiffpp::bundle::GroupModel;
 pub use dancegen_tcdiffpp::config::LongSampler;
@@ -25,6 +24,7 @@ use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, N_MIN};
 use dancegen_tcdiffpp::sampler::{GroupRequest, GroupSampleOptions, RootXy, generate};
 
 use crate::error::GenerateError;
+use crate::formation_file::{ANY_SONG_SECONDS, FormationFile};
 use crate::song::FPS;
 use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, GroupReport, Role};
@@ -36,17 +36,6 @@ pub const MAX_DANCERS: usize = N_MAX;
 
 /// Shortest music a group dance is made for (one half window of the model, 2.5 s).
 pub const MIN_GROUP_SECONDS: f64 = 2.5;
-
-/// A song length no formation time exceeds: the check before the song is analysed.
-const ANY_SONG_SECONDS: f64 = 1e9;
-
-/// A formation file, read but not yet checked against the song.
-#[derive(Clone, Debug)]
-pub struct FormationFile {
-    /// The file, as named in messages.
-    pub label: String,
-    pub json: String,
-}
 
 /// Group options beyond [`CommonOptions`].
 #[derive(Clone, Debug)]
@@ -77,27 +66,9 @@ impl GroupOptions {
 
     /// Reads `path` as a formation file (checked later against the song).
     pub fn with_formation_file(mut self, path: &Path) -> Result<Self, GenerateError> {
-        let json = std::fs::read_to_string(path).map_err(|e| {
-            GenerateError::Invalid(format!(
-                "{}: cannot read the formation: {e}",
-                path.display()
-            ))
-        })?;
-        self.formation = Some(FormationFile {
-            label: path.display().to_string(),
-            json,
-        });
+        self.formation = Some(FormationFile::read(path, "the formation")?);
         Ok(self)
     }
-}
-
-fn parse_formation(
-    f: &FormationFile,
-    dancers: usize,
-    song_seconds: f64,
-) -> Result<Formation, GenerateError> {
-    Formation::parse(&f.label, &f.json, dancers, song_seconds)
-        .map_err(|e| GenerateError::Invalid(e.to_string()))
 }
 
 pub struct Group;
@@ -147,7 +118,7 @@ impl DanceSystem for Group {
         }
         // Everything but the times against the song's length (checked once it is known).
         if let Some(f) = &group.formation {
-            parse_formation(f, group.dancers, ANY_SONG_SECONDS)?;
+            f.parse(group.dancers, ANY_SONG_SECONDS)?;
         }
         Ok(())
     }
@@ -170,7 +141,7 @@ impl DanceSystem for Group {
         let frames = span.end_frame - span.first_frame;
         let fps = f64::from(FPS);
         let formation = match &opts.formation {
-            Some(f) => Some(parse_formation(f, n, song.seconds())?),
+            Some(f) => Some(f.parse(n, song.seconds())?),
             None => None,
         };
         // Requested stage paths of the danced frames, `[dancer][frame]`.

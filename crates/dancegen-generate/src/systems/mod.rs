@@ -37,11 +37,12 @@ const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
 
 /// Which system applies which edit, as a text table (`generate --help` and the README).
 pub fn edits_table() -> String {
-    use crate::edit::{CONTINUE, KEEP_JOINTS, REGENERATE};
-    let ops = [REGENERATE, CONTINUE, KEEP_JOINTS];
+    let ops = crate::edit::OPERATIONS;
+    // Each column as wide as its flag or "not yet".
+    let width = |op: &str| op.len().max("not yet".len());
     let mut out = String::from("Edits (which system supports what):\n  system    ");
     for op in ops {
-        out += &format!(" {op:<20}");
+        out += &format!(" {op:<w$}", w = width(op));
     }
     for s in SYSTEMS.iter().filter(|s| s.available) {
         out += &format!("\n  {:<10}", s.name);
@@ -51,7 +52,7 @@ pub fn edits_table() -> String {
             } else {
                 "not yet"
             };
-            out += &format!(" {yes:<20}");
+            out += &format!(" {yes:<w$}", w = width(op));
         }
     }
     out.lines()

@@ -69,7 +69,13 @@ impl DanceSystem for Solo {
     const DEFAULT_MODEL: &'static str = "lodgepp-small";
     // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
-    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE, edit::KEEP_JOINTS];
+    const EDITS: &'static [&'static str] = &[
+        edit::REGENERATE,
+        edit::CONTINUE,
+        edit::KEEP_JOINTS,
+        edit::KEYFRAME,
+        edit::PATH,
+    ];
 
     type Model = SoloModel;
     type Options = SoloOptions;
@@ -171,10 +177,12 @@ impl DanceSystem for Solo {
     }
 }
 
-/// An edit (`--edit … --regenerate`, `--continue-from`, `--keep-joints … --from`): the known
-/// frames and joints stay, the rest is inpainted by the PDDM (`dancegen_lodgepp::inpaint`) without the choreography network, and
-/// the known values are spliced back exactly. The beat warp and the foot lock are not applied:
-/// both move frames that must stay as they were.
+/// An edit (`--edit … --regenerate`, `--continue-from`, `--keep-joints … --from`,
+/// `--keyframe`, `--path`): the known frames, joints and root parts stay, the rest is
+/// inpainted by the PDDM (`dancegen_lodgepp::inpaint`) without the choreography network, and
+/// the known values are spliced back exactly. The beat warp is not applied (it moves frames
+/// in time, and known ones must stay where they are); the foot lock runs on the made frames
+/// only.
 fn edit(
     model: &SoloModel,
     input: &DanceInput<'_, SoloOptions>,
@@ -203,7 +211,7 @@ fn edit(
     }
     let known = common
         .edit
-        .known(frames)?
+        .known(&span, song.seconds())?
         .expect("a non-empty edit knows something");
     let (values, mask) = known.edge151()?;
     let opts = generate_options(model, genre_index, common, input.options);
@@ -219,7 +227,8 @@ fn edit(
     check_finite(&done.frames)?;
     let mut motion =
         Edge151::decode(&done.frames).map_err(|e| GenerateError::Generation(e.to_string()))?;
-    let made: Vec<bool> = (0..frames).map(|f| !known.kept(f)).collect();
+    // The floor moves only the root heights that are made; known ones are kept.
+    let made: Vec<bool> = known.root_height.iter().map(|&k| !k).collect();
     floor_made_frames(&mut motion, &made)?;
     lift_made_frames_above_floor(&mut motion, &made).map_err(GenerateError::Generation)?;
     known.splice(&mut motion);
@@ -240,8 +249,9 @@ fn edit(
         ),
         timing_breakdown: String::new(),
         notes: vec![format!(
-            "an edit: the kept frames are the input's; the new ones join them (root moved by at \
-             most {:.2} m to meet the kept path); no beat warp or foot lock",
+            "an edit: what was given is kept exactly; the new frames join it (root moved by at \
+             most {:.2} m to meet the given path); the foot lock on the new frames only, no \
+             beat warp",
             done.largest_join_correction_m
         )],
         group: None,
