@@ -28,6 +28,7 @@ use tower_http::timeout::{RequestBodyDeadlineLayer, TimeoutLayer};
 
 use crate::catalog::Catalog;
 use crate::config::{Limits, SSE_KEEP_ALIVE};
+use crate::edit_job;
 use crate::error::ApiError;
 use crate::files;
 use crate::jobs::Jobs;
@@ -132,43 +133,62 @@ async fn submit(
     // rather than a connection closed under it; before the song is decoded, so a full queue
     // costs no decoding. Checked again when the job is added.
     check_queue(&s)?;
-    if up.song.bytes.len() > limit {
+    // An edit takes its song, leader, system and span from the job it edits.
+    let edited = match &up.params.edit {
+        Some(e) => Some((edit_job::edited_job(&s.jobs, e)?, e.clone())),
+        None => None,
+    };
+    let params = match &edited {
+        Some((row, _)) => up.params.clone().editing(&row.params),
+        None => up.params.clone(),
+    };
+    if let Some(song) = &up.song
+        && song.bytes.len() > limit
+    {
         return Err(ApiError::new(
             StatusCode::PAYLOAD_TOO_LARGE,
             format!("the song is larger than the limit of {} MB", limit >> 20),
         ));
     }
-    s.catalog.check(&up.params)?;
+    s.catalog.check(&params)?;
 
     // Files first, in a hidden folder renamed into place, then the row: a crash in between
     // leaves no half job.
     let id = s.jobs.new_id();
     let jobs_dir = files::jobs_dir(s.jobs.data_dir());
     let incoming = jobs_dir.join(format!(".incoming-{id}"));
-    let song_name = upload::song_file_name(&up.song.name);
-    let leader_name = up
-        .leader
-        .as_ref()
-        .map(|l| upload::leader_file_name(&l.name));
-    let song_bytes: Arc<[u8]> = Arc::from(up.song.bytes);
+    let (song_name, leader_name) = match (&edited, &up.song) {
+        (Some((row, _)), _) => (row.song.clone(), row.leader.clone()),
+        (None, song) => (
+            upload::song_file_name(song.as_ref().map_or("", |f| f.name.as_str())),
+            up.leader
+                .as_ref()
+                .map(|l| upload::leader_file_name(&l.name)),
+        ),
+    };
+    let song_bytes: Option<Arc<[u8]>> = up.song.map(|f| Arc::from(f.bytes));
     let leader_bytes = up.leader.map(|l| l.bytes);
     let max_seconds = s.limits.song_seconds;
+    let edited_dir = edited.as_ref().map(|(row, _)| s.jobs.job_dir(&row.id));
     let prepared = {
-        let (incoming, song_name, leader_name, song_bytes) = (
-            incoming.clone(),
-            song_name.clone(),
-            leader_name.clone(),
-            song_bytes.clone(),
-        );
+        let (incoming, song_name, leader_name) =
+            (incoming.clone(), song_name.clone(), leader_name.clone());
         tokio::task::spawn_blocking(move || -> Result<(), ApiError> {
-            upload::check_song(&song_name, song_bytes.clone(), max_seconds)?;
+            if let Some(bytes) = &song_bytes {
+                upload::check_song(&song_name, bytes.clone(), max_seconds)?;
+            }
             std::fs::create_dir_all(&incoming)
                 .map_err(|e| ApiError::internal(format!("{}: {e}", incoming.display())))?;
+            if let (Some((row, e)), Some(from)) = (&edited, &edited_dir) {
+                return edit_job::take_files(from, row, e, &incoming);
+            }
             let write = |name: &str, bytes: &[u8]| {
                 std::fs::write(incoming.join(name), bytes)
                     .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))
             };
-            write(&song_name, &song_bytes)?;
+            if let Some(bytes) = &song_bytes {
+                write(&song_name, bytes)?;
+            }
             if let (Some(name), Some(bytes)) = (&leader_name, &leader_bytes) {
                 write(name, bytes)?;
                 upload::check_leader(&incoming.join(name))?;
@@ -185,7 +205,7 @@ async fn submit(
             .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))?;
         s.jobs
             .store
-            .insert(&id, &up.params, &song_name, leader_name.as_deref())?;
+            .insert(&id, &params, &song_name, leader_name.as_deref())?;
         Ok(())
     });
     if let Err(e) = queued {
@@ -193,7 +213,7 @@ async fn submit(
         let _ = std::fs::remove_dir_all(s.jobs.job_dir(&id));
         return Err(e);
     }
-    tracing::info!("job {id}: queued ({})", up.params.system);
+    tracing::info!("job {id}: queued ({})", params.system);
     s.jobs.publish(&id);
     s.jobs.notify_work();
     Ok((StatusCode::ACCEPTED, Json(serde_json::json!({ "id": id }))))

@@ -9,6 +9,7 @@ use serde_json::{Map, Value};
 
 use dancegen_generate::systems::{self, group};
 
+use crate::edit_params::EditParams;
 use crate::error::ApiError;
 
 /// Where a job is in its life. Stored in SQLite by [`JobState::as_str`].
@@ -72,13 +73,20 @@ pub struct JobParams {
     pub variations: usize,
     /// Also render an `.mp4` preview with the song (takes as long as the dance itself).
     pub mp4: bool,
+    /// A new version of a finished job's dance ([`EditParams`]); the song, system, dancers,
+    /// start and end are that job's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edit: Option<EditParams>,
 }
 
 /// Most denoising steps a user may ask for (the models are trained with 1000 timesteps).
 pub const MAX_STEPS: usize = 1000;
 
 /// The fields `params` may have, for the error about an unknown one.
-const FIELDS: &str = "system, dancers, seed, genre, steps, start, end, variations, mp4";
+const FIELDS: &str = "system, dancers, seed, genre, steps, start, end, variations, mp4, edit";
+
+/// The parameters an edit takes from the job it edits, not from its own params.
+const FROM_THE_EDITED_JOB: [&str; 5] = ["system", "dancers", "genre", "start", "end"];
 
 impl JobParams {
     /// Parses and checks `params` (a JSON object; empty text = every default). `max_variations`
@@ -119,6 +127,19 @@ impl JobParams {
             return Err(ApiError::field(
                 k,
                 format!("unknown parameter '{k}' (known: {FIELDS})"),
+            ));
+        }
+        let edit = match obj.get("edit") {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(EditParams::parse(v)?),
+        };
+        if edit.is_some()
+            && let Some(k) = FROM_THE_EDITED_JOB.iter().find(|k| obj.contains_key(**k))
+        {
+            return Err(ApiError::field(
+                k,
+                "an edit dances with the system, dancers, genre, start and end of the job \
+                 it edits; leave this out",
             ));
         }
         let system = opt_str(&obj, "system")?.unwrap_or_else(|| "solo".into());
@@ -217,7 +238,19 @@ impl JobParams {
             end,
             variations,
             mp4,
+            edit,
         })
+    }
+
+    /// These params as an edit of the job whose params are `edited`: its system, dancers,
+    /// genre, start and end.
+    pub fn editing(mut self, edited: &JobParams) -> Self {
+        self.system = edited.system.clone();
+        self.dancers = edited.dancers;
+        self.genre = edited.genre.clone();
+        self.start = edited.start;
+        self.end = edited.end;
+        self
     }
 
     /// Dancers in the finished dance.
@@ -415,6 +448,18 @@ mod tests {
             Some("genre")
         );
         assert!(err(r#"{"system":"ballet"}"#).message.contains("solo"));
+        let edit = r#""edit":{"of":"j1","regenerate":[[1,2]]}"#;
+        for field in ["system", "start", "end"] {
+            let value = if field == "system" { "\"solo\"" } else { "1" };
+            let text = format!("{{\"{field}\":{value},{edit}}}");
+            assert_eq!(err(&text).field.as_deref(), Some(field), "{text}");
+        }
+        assert_eq!(
+            err(r#"{"edit":{"of":"j1"}}"#).field.as_deref(),
+            Some("edit.regenerate")
+        );
+        let ok = JobParams::parse(&format!("{{\"seed\":3,{edit}}}"), 4).unwrap();
+        assert_eq!(ok.edit.unwrap().regenerate, vec![[1.0, 2.0]]);
     }
 
     #[test]

@@ -16,6 +16,8 @@ pub mod api;
 pub mod catalog;
 pub mod client;
 pub mod config;
+pub mod edit_job;
+pub mod edit_params;
 pub mod error;
 pub mod files;
 pub mod job;

@@ -17,7 +17,8 @@ use crate::job::JobParams;
 
 /// The parts of an upload.
 pub struct Upload {
-    pub song: UploadedFile,
+    /// The song; `None` for an edit, which dances to the song of the job it edits.
+    pub song: Option<UploadedFile>,
     pub leader: Option<UploadedFile>,
     pub params: JobParams,
 }
@@ -131,6 +132,22 @@ pub async fn read(
         &form_fields,
         max_variations,
     )?;
+    if params.edit.is_some() {
+        // The song and the leader are the edited job's.
+        for (part, given) in [("song", song.is_some()), ("leader", leader.is_some())] {
+            if given {
+                return Err(ApiError::field(
+                    part,
+                    "an edit dances to the song (and leader) of the job it edits; send none",
+                ));
+            }
+        }
+        return Ok(Upload {
+            song: None,
+            leader: None,
+            params,
+        });
+    }
     let song = song.ok_or_else(|| ApiError::field("song", "missing: attach the song file"))?;
     if song.bytes.is_empty() {
         return Err(ApiError::field("song", "the file is empty"));
@@ -155,7 +172,7 @@ pub async fn read(
         _ => {}
     }
     Ok(Upload {
-        song,
+        song: Some(song),
         leader,
         params,
     })

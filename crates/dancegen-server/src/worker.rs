@@ -150,6 +150,10 @@ fn generate(
         .iter()
         .find(|(name, _)| *name == p.system)
         .map(|(_, d)| d.clone());
+    let edit = match &p.edit {
+        Some(e) => crate::edit_job::library_edit(&dir, e)?,
+        None => Default::default(),
+    };
     let variations = p.variations.max(1);
     let last_store = std::sync::Mutex::new(Instant::now() - STORE_PROGRESS_EVERY);
     for k in 0..variations {
@@ -189,7 +193,7 @@ fn generate(
                 genre: p.genre.clone(),
                 start: p.start,
                 end: p.end,
-                edit: Default::default(),
+                edit: edit.clone(),
             },
             model: model.clone(),
             outputs,

@@ -338,3 +338,75 @@ fn systems_page_and_viewer_are_served() {
     assert_eq!(s.get("/no-such-page.js").status, 404);
     assert_eq!(s.get("/api/nothing-here").status, 404);
 }
+
+/// `edit` in a job's params (issue 44): a new job, the same song and system, the frames
+/// outside the regenerated range the edited dance's, the range new; bad edits get a 400 that
+/// names the field.
+#[test]
+fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
+    let s = start(Limits::default());
+    let r = s.submit_song(&demo_song(), r#"{"seed": 1, "end": 10}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+
+    let params = format!(
+        r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]], "keep": "legs"}}}}"#
+    );
+    let r = s.submit(&[("params", None, params.as_bytes())]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let eid = r.json["id"].as_str().unwrap().to_string();
+    let edited = s.wait(&eid, JOB_TIMEOUT);
+    assert_eq!(edited["state"], "done", "{edited}");
+    assert_eq!(edited["params"]["system"], "solo");
+    assert_eq!(edited["params"]["end"], 10.0);
+    assert_eq!(edited["params"]["edit"]["of"], id.as_str());
+    let npy = |job: &Value| {
+        let bytes = s.download(job["variations"][0]["files"]["npy"].as_str().unwrap());
+        dancegen_io::npy::parse_npy(&bytes).unwrap().data
+    };
+    let (old, new) = (npy(&job), npy(&edited));
+    assert_eq!(old.len(), new.len());
+    let frame = 72;
+    for f in (0..old.len() / frame).filter(|f| !(90..180).contains(f)) {
+        for i in f * frame..(f + 1) * frame {
+            assert!((old[i] - new[i]).abs() <= 1e-4, "frame {f} changed");
+        }
+    }
+    let moved = (90 * frame..180 * frame)
+        .map(|i| (old[i] - new[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.05, "the range is the old one ({moved} m)");
+
+    for (params, field) in [
+        (
+            r#"{"edit": {"of": "nosuchjob", "regenerate": [[1, 2]]}}"#.to_string(),
+            "edit.of",
+        ),
+        (
+            format!(r#"{{"edit": {{"of": "{id}", "regenerate": [[8, 12]]}}}}"#),
+            "edit.regenerate",
+        ),
+        (
+            format!(r#"{{"edit": {{"of": "{id}", "regenerate": [[1, 2]], "variation": 3}}}}"#),
+            "edit.variation",
+        ),
+        (
+            format!(r#"{{"system": "group", "edit": {{"of": "{id}", "regenerate": [[1, 2]]}}}}"#),
+            "system",
+        ),
+    ] {
+        let r = s.submit(&[("params", None, params.as_bytes())]);
+        assert_eq!(r.status, 400, "{params}: {}", r.json);
+        assert_eq!(r.json["field"], field, "{params}: {}", r.json);
+    }
+    let song = std::fs::read(demo_song()).unwrap();
+    let params = format!(r#"{{"edit": {{"of": "{id}", "regenerate": [[1, 2]]}}}}"#);
+    let r = s.submit(&[
+        ("song", Some("song.ogg"), &song),
+        ("params", None, params.as_bytes()),
+    ]);
+    assert_eq!(r.status, 400, "{}", r.json);
+    assert_eq!(r.json["field"], "song");
+}

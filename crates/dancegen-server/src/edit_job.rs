@@ -1,0 +1,128 @@
+//! A job that edits another job's dance ([`EditParams`]): the checks when it is submitted,
+//! the files it takes from the edited job, and the library edit the worker runs.
+//!
+//! The new job's folder gets its own copy of the edited job's song, leader and the edited
+//! variation's `.npz` ([`EDITED_DANCE`]), so it runs, and can run again after a restart,
+//! whatever happens to the job it edits.
+
+use std::path::Path;
+
+use dancegen_generate::GenerateError;
+use dancegen_generate::edit::{self, Edit, GivenMotion, KeepJoints, parse_joint_set};
+use dancegen_generate::systems;
+
+use crate::edit_params::EditParams;
+use crate::error::ApiError;
+use crate::job::{JobState, variation_stem};
+use crate::jobs::Jobs;
+use crate::store::JobRow;
+
+/// The edited dance, in the new job's folder.
+pub const EDITED_DANCE: &str = "edited.npz";
+
+/// The job `e` edits, if it can be edited: it exists, is done, has the variation, and its
+/// system edits (`--regenerate`). Errors name the `edit` field.
+pub fn edited_job(jobs: &Jobs, e: &EditParams) -> Result<JobRow, ApiError> {
+    let row = jobs
+        .store
+        .get(&e.of)
+        .map_err(|err| ApiError::internal(format!("reading job {}: {err}", e.of)))?
+        .ok_or_else(|| ApiError::field("edit.of", format!("there is no job {}", e.of)))?;
+    if row.state != JobState::Done {
+        return Err(ApiError::field(
+            "edit.of",
+            format!(
+                "job {} is {}; only a finished dance can be edited",
+                e.of,
+                row.state.as_str()
+            ),
+        ));
+    }
+    if e.variation >= row.params.variations.max(1) {
+        return Err(ApiError::field(
+            "edit.variation",
+            format!(
+                "{}: job {} has {} variation(s), 0 to {}",
+                e.variation,
+                e.of,
+                row.params.variations,
+                row.params.variations.max(1) - 1
+            ),
+        ));
+    }
+    let info = systems::by_name(&row.params.system).map_err(|m| ApiError::field("edit.of", m))?;
+    if !info.edits.contains(&edit::REGENERATE) {
+        return Err(ApiError::field(
+            "edit.of",
+            format!(
+                "job {} is a {} dance; editing it is not supported yet",
+                e.of, row.params.system
+            ),
+        ));
+    }
+    Ok(row)
+}
+
+/// Copies what the edit needs from the edited job's folder `from` into the new job's folder
+/// `to` (its song, leader and the dance), and checks the ranges against the dance.
+pub fn take_files(from: &Path, row: &JobRow, e: &EditParams, to: &Path) -> Result<(), ApiError> {
+    let copy = |name: &str, as_name: &str| {
+        std::fs::copy(from.join(name), to.join(as_name))
+            .map(|_| ())
+            .map_err(|err| {
+                ApiError::field(
+                    "edit.of",
+                    format!("job {}: its file {name} cannot be read: {err}", e.of),
+                )
+            })
+    };
+    copy(&row.song, &row.song)?;
+    if let Some(l) = &row.leader {
+        copy(l, l)?;
+    }
+    copy(
+        &format!("{}.npz", variation_stem(e.variation)),
+        EDITED_DANCE,
+    )?;
+    let base = load_dance(to).map_err(|err| ApiError::field("edit.of", err.to_string()))?;
+    Edit {
+        base: Some(base),
+        regenerate: e.regenerate.clone(),
+        ..Edit::default()
+    }
+    .check()
+    .map_err(|err| ApiError::field("edit.regenerate", err.to_string()))
+}
+
+fn load_dance(dir: &Path) -> Result<GivenMotion, GenerateError> {
+    GivenMotion::load(
+        &dir.join(EDITED_DANCE),
+        "the dance to edit",
+        None,
+        "(a dance the server wrote has its rate)",
+    )
+}
+
+/// The library edit of the job in `dir` (its copy of the edited dance).
+pub fn library_edit(dir: &Path, e: &EditParams) -> Result<Edit, GenerateError> {
+    let base = load_dance(dir)?;
+    let keep_joints = match &e.keep {
+        None => None,
+        Some(spec) => {
+            let (joints, root) =
+                parse_joint_set("edit.keep", spec).map_err(GenerateError::Invalid)?;
+            Some(KeepJoints {
+                spec: spec.clone(),
+                joints,
+                root,
+                from: base.clone(),
+            })
+        }
+    };
+    Ok(Edit {
+        base: Some(base),
+        regenerate: e.regenerate.clone(),
+        keep_joints,
+        ..Edit::default()
+    })
+}
