@@ -62,6 +62,7 @@ pub fn router(state: AppState) -> Router {
         .route("/api/systems", get(systems))
         .route("/api/jobs/{id}", get(status).delete(delete))
         .route("/api/jobs/{id}/events", get(events))
+        .route("/api/jobs/{id}/versions", get(versions))
         .route("/api/jobs/{id}/files/{name}", get(file))
         .route("/api/{*rest}", get(unknown_api))
         .fallback(crate::web::asset)
@@ -243,6 +244,18 @@ async fn status(
     Path(id): Path<String>,
 ) -> Result<Json<crate::job::JobView>, ApiError> {
     s.jobs.view(&id)?.map(Json).ok_or_else(|| no_job(&id))
+}
+
+/// `{"versions": [...]}`: the dance `id` belongs to, every version of it ([`crate::versions`]).
+async fn versions(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    if !files::valid_id(&id) {
+        return Err(no_job(&id));
+    }
+    let list = crate::versions::versions(&s.jobs, &id)?.ok_or_else(|| no_job(&id))?;
+    Ok(Json(serde_json::json!({ "versions": list })))
 }
 
 async fn delete(State(s): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use dancegen_generate::ModelLocator;
+use dancegen_generate::edit;
 use dancegen_generate::systems::{self, group};
 use serde_json::{Value, json};
 
@@ -24,6 +25,8 @@ pub struct SystemEntry {
     pub min_dancers: usize,
     pub max_dancers: usize,
     pub needs_leader: bool,
+    /// The edit operations its sampler applies (`DanceSystem::EDITS`).
+    pub edits: &'static [&'static str],
 }
 
 pub struct Catalog {
@@ -86,6 +89,7 @@ impl Catalog {
                     min_dancers,
                     max_dancers,
                     needs_leader: s.name == "duet",
+                    edits: s.edits,
                 }
             })
             .collect();
@@ -137,6 +141,12 @@ impl Catalog {
                     "default_genre": s.default_genre,
                     "dancers": {"min": s.min_dancers, "max": s.max_dancers},
                     "needs_leader": s.needs_leader,
+                    // What `params.edit` can ask of its dances: regenerate ranges, and keep
+                    // joints of the old dance in them.
+                    "edit": {
+                        "regenerate": s.edits.contains(&edit::REGENERATE),
+                        "keep": s.edits.contains(&edit::KEEP_JOINTS),
+                    },
                 })
             })
             .collect();

@@ -60,6 +60,15 @@ pub fn edited_job(jobs: &Jobs, e: &EditParams) -> Result<JobRow, ApiError> {
             ),
         ));
     }
+    if e.keep.is_some() && !info.edits.contains(&edit::KEEP_JOINTS) {
+        return Err(ApiError::field(
+            "edit.keep",
+            format!(
+                "job {} is a {} dance, which keeps no joints in an edit; leave keep out",
+                e.of, row.params.system
+            ),
+        ));
+    }
     Ok(row)
 }
 

@@ -24,6 +24,7 @@ pub mod job;
 pub mod jobs;
 pub mod store;
 pub mod upload;
+pub mod versions;
 pub mod web;
 pub mod worker;
 

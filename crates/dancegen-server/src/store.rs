@@ -148,6 +148,15 @@ impl Store {
             .optional()
     }
 
+    /// The jobs that edit job `id` (`params.edit.of`), oldest first.
+    pub fn edits_of(&self, id: &str) -> rusqlite::Result<Vec<JobRow>> {
+        let conn = self.conn();
+        let mut st = conn.prepare(&format!(
+            "SELECT {COLUMNS} FROM jobs WHERE json_extract(params, '$.edit.of') = ?1 ORDER BY seq"
+        ))?;
+        st.query_map([id], row_of)?.collect()
+    }
+
     /// Jobs queued or running (the queue-length limit counts these).
     pub fn active_count(&self) -> rusqlite::Result<usize> {
         self.conn().query_row(

@@ -16,8 +16,12 @@
  *                               every change)
  *   GET    api/jobs/<id>        the job JSON (used when the event stream is refused)
  *   DELETE api/jobs/<id>        cancel
+ *   (editing and versions: edit.js)
+ *
+ * URLs: `/?job=<id>` a job; `/?job=<id>&compare=<other>` two versions of a dance side by side.
  */
 import { Viewer, downloadLinks } from './viewer.js';
+import { EditPanel, fetchVersions, renderVersions } from './edit.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -59,6 +63,8 @@ function deferred() {
 let viewerReady = deferred();
 /** The open viewer (a done job), or null. */
 let viewer = null;
+/** The open job's edit box and versions list (edit.js), or null. */
+let editPanel = null;
 /** The open job's event stream, or null. */
 let events = null;
 
@@ -74,6 +80,8 @@ window.__viewer = {
   audio: () => openViewer().audio,
   play: () => openViewer().play(),
   count: () => openViewer().count,
+  /** Resolves when the edit box and the versions list are shown. */
+  edited: () => editPanel?.ready ?? Promise.resolve(),
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -129,7 +137,9 @@ function formatSize(bytes) {
 function route() {
   closeJob();
   clearNotice();
-  const id = new URLSearchParams(location.search).get('job');
+  const query = new URLSearchParams(location.search);
+  const id = query.get('job');
+  comparing = query.get('compare');
   $('submit-view').hidden = Boolean(id);
   $('job-view').hidden = !id;
   if (id) openJob(id);
@@ -139,6 +149,8 @@ function route() {
 function closeJob() {
   events?.close();
   events = null;
+  editPanel?.dispose();
+  editPanel = null;
   viewer?.dispose();
   viewer = null;
   viewerReady.reject(new Error('the page left this job'));
@@ -371,6 +383,53 @@ async function submit() {
 // ---------------------------------------------------------------------------------------------
 // A job: progress while it runs, then the viewer.
 
+/** The version shown beside the open job (`&compare=<id>`), or null. */
+let comparing = null;
+
+/** What edit.js needs of the page. */
+const page = {
+  notice: (text) => showNotice(text),
+  clearNotice: () => clearNotice(),
+  markField: (field) => markField(field),
+  open: (url) => {
+    history.pushState(null, '', url);
+    route();
+  },
+};
+
+/** A done job: its viewer, or two versions side by side. */
+async function showDone(job) {
+  if (!comparing) {
+    startViewer(job);
+    return;
+  }
+  const other = comparing;
+  let shown = job;
+  try {
+    const res = await fetch(`api/jobs/${encodeURIComponent(other)}`);
+    const them = res.ok ? await res.json() : null;
+    if (viewer || comparing !== other) return;
+    if (!them || them.state !== 'done' || !them.variations?.length) {
+      showNotice(them ? `Version ${other} is ${them.state}, so it cannot be compared yet.` : `There is no job ${other} to compare with (it may have been deleted).`);
+    } else {
+      const versions = await fetchVersions(job.id);
+      const number = (id) => versions.find((v) => v.id === id)?.number;
+      const label = (id) => (number(id) ? `Version ${number(id)}` : `Job ${id}`);
+      shown = {
+        ...job,
+        variations: [
+          { ...job.variations[0], label: label(job.id) },
+          { ...them.variations[0], label: label(other) },
+        ],
+      };
+      renderVersions(versions, job.id, other, page);
+    }
+  } catch (e) {
+    showNotice(`Cannot reach the server to compare (${e.message}).`);
+  }
+  if (!viewer) startViewer(shown);
+}
+
 function openJob(id) {
   $('job-status').textContent = 'Connecting…';
   $('progress-box').hidden = false;
@@ -465,7 +524,7 @@ function showJob(job) {
     case 'done':
       $('progress-box').hidden = true;
       document.title = 'dancegen — your dance';
-      if (!viewer) startViewer(job);
+      if (!viewer) showDone(job);
       break;
     case 'failed':
       document.title = 'dancegen — failed';
@@ -511,8 +570,13 @@ function startViewer(job) {
     return;
   }
   viewer.onError = (e) => showNotice(e.message);
+  const shown = viewer;
   viewer.ready.then(
-    () => ready.resolve(),
+    () => {
+      // Editing goes with one job's own viewer, not with a comparison.
+      if (viewer === shown && !comparing) editPanel = new EditPanel(job, viewer, page);
+      ready.resolve();
+    },
     (e) => {
       showNotice(e.message);
       ready.reject(e);

@@ -109,7 +109,8 @@ class Stage {
     const caption = document.createElement('figcaption');
     const title = document.createElement('span');
     title.className = 'title';
-    title.textContent = `Variation ${index + 1}` + (variation.seed !== undefined ? ` · seed ${variation.seed}` : '');
+    // A comparison of versions labels each one (app.js); a job's variations are numbered.
+    title.textContent = (variation.label ?? `Variation ${index + 1}`) + (variation.seed !== undefined ? ` · seed ${variation.seed}` : '');
     const links = document.createElement('span');
     links.className = 'downloads';
     links.append(downloadLinks(variation.files));

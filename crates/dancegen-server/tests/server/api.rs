@@ -379,6 +379,22 @@ fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
         .fold(0.0, f64::max);
     assert!(moved > 0.05, "the range is the old one ({moved} m)");
 
+    // Both jobs list the same two versions, the first one first.
+    for of in [&id, &eid] {
+        let r = s.get(&format!("/api/jobs/{of}/versions"));
+        assert_eq!(r.status, 200, "{}", r.json);
+        let v = r.json["versions"].as_array().unwrap();
+        assert_eq!(v.len(), 2, "{}", r.json);
+        assert_eq!(
+            (v[0]["id"].as_str(), v[0]["number"].as_u64()),
+            (Some(id.as_str()), Some(1))
+        );
+        assert_eq!(v[1]["id"].as_str(), Some(eid.as_str()));
+        assert_eq!(v[1]["edit"]["regenerate"][0][1], 6.0);
+        assert!(v[0].get("edit").is_none());
+    }
+    assert_eq!(s.get("/api/jobs/nosuchjob/versions").status, 404);
+
     for (params, field) in [
         (
             r#"{"edit": {"of": "nosuchjob", "regenerate": [[1, 2]]}}"#.to_string(),

@@ -126,9 +126,8 @@ fn max_error(scene: &Value, npy: &NpyArray, t: u32) -> f32 {
     worst
 }
 
-/// What every page must satisfy: no error, every request to the server's own host, and
-/// playing moves the song and the dancers.
-fn check_page(report: &Value, base: &str, name: &str) {
+/// What every page must satisfy: no error, and every request to the server's own host.
+fn check_requests(report: &Value, base: &str, name: &str) {
     let errors = report["errors"].as_array().unwrap();
     assert!(errors.is_empty(), "{name}: page errors {errors:?}");
     for url in report["requests"].as_array().unwrap() {
@@ -138,6 +137,11 @@ fn check_page(report: &Value, base: &str, name: &str) {
             "{name}: a request left the host: {url}"
         );
     }
+}
+
+/// [`check_requests`], and playing moves the song and the dancers.
+fn check_page(report: &Value, base: &str, name: &str) {
+    check_requests(report, base, name);
     let play = &report["play"];
     let (t0, t1) = (play["t0"].as_f64().unwrap(), play["t1"].as_f64().unwrap());
     assert!(
@@ -197,4 +201,108 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
             }
         }
     }
+}
+
+/// The editing flow in the page (issue 44): mark a part on the timeline, regenerate it as a
+/// new version, see the versions listed, compare two side by side with their own downloads.
+#[test]
+fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let r = s.submit_song(&demo_song(), r#"{"seed": 3, "end": 10}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("edit-shots");
+    let out = Command::new("node")
+        .arg(browser_dir().join("edit_check.mjs"))
+        .arg(s.server.url())
+        .arg(&id)
+        .arg(&shots)
+        .output()
+        .expect("this test needs node (Node.js) on the PATH");
+    assert!(
+        out.status.success(),
+        "edit_check failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "edit_check printed no JSON ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    });
+    println!("edit flow: {report}\nscreenshots in {}", shots.display());
+    check_requests(&report, &s.server.url(), "edit");
+
+    // The marked part is shown on the timeline: 2-4 s of a 10 s dance.
+    let sel = &report["selection"];
+    assert_eq!(sel["hidden"], false, "{sel}");
+    let pct = |v: &Value| {
+        v.as_str()
+            .unwrap_or("")
+            .trim_end_matches('%')
+            .parse::<f64>()
+            .ok()
+    };
+    assert!(
+        pct(&sel["left"]).is_some_and(|l| (l - 20.0).abs() < 1.5),
+        "selection starts at {sel}"
+    );
+
+    // The new version is a job that edits this one, made from the marks.
+    let eid = report["edited"].as_str().expect("a new version opened");
+    assert_ne!(eid, id);
+    let edited = s.wait(eid, JOB_TIMEOUT);
+    assert_eq!(edited["state"], "done", "{edited}");
+    let edit = &edited["params"]["edit"];
+    assert_eq!(edit["of"], id.as_str(), "{edited}");
+    assert_eq!(edit["keep"], "arms", "{edited}");
+    let part = edit["regenerate"][0].as_array().unwrap();
+    let (a, b) = (part[0].as_f64().unwrap(), part[1].as_f64().unwrap());
+    assert!((a - 2.0).abs() < 0.15 && (b - 4.0).abs() < 0.15, "{edit}");
+    let old = npy(&s.download(job["variations"][0]["files"]["npy"].as_str().unwrap()));
+    let new = npy(&s.download(edited["variations"][0]["files"]["npy"].as_str().unwrap()));
+    let frame = 72;
+    let (fa, fb) = ((a * 30.0).round() as usize, (b * 30.0).round() as usize);
+    for f in (0..old.data.len() / frame).filter(|f| !(fa..fb).contains(f)) {
+        for i in f * frame..(f + 1) * frame {
+            assert!(
+                (old.data[i] - new.data[i]).abs() <= 1e-4,
+                "frame {f} changed"
+            );
+        }
+    }
+
+    // Both versions listed; the comparison shows both, each with its downloads.
+    let versions = report["versions"].as_array().unwrap();
+    assert_eq!(versions.len(), 2, "{report}");
+    assert_eq!(report["versionsShown"], true);
+    assert!(
+        versions[1].as_str().unwrap().contains("made new"),
+        "{report}"
+    );
+    let cmp = &report["compare"];
+    assert_eq!(cmp["figures"], 2, "{cmp}");
+    let titles: Vec<&str> = cmp["titles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
+    assert!(
+        titles[0].starts_with("Version 2") && titles[1].starts_with("Version 1"),
+        "{titles:?}"
+    );
+    assert!(
+        cmp["downloads"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|n| n.as_u64() >= Some(5)),
+        "{cmp}"
+    );
+    assert_eq!(cmp["editBoxShown"], false, "{cmp}");
 }
