@@ -254,3 +254,57 @@ fn bad_lines_fail_alone_with_their_line_and_the_rest_goes_on() {
     ]);
     assert!(stderr(&o).contains("need 0 ≤ I < N"), "{}", stderr(&o));
 }
+
+/// Edits through a manifest (issue 44): an `--edit` with its ranges and a keyframe, their
+/// files taken from the manifest's folder like the song.
+#[test]
+fn a_manifest_line_edits_a_dance_and_reaches_a_keyframe() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(song("feelings.ogg"), dir.path().join("here.ogg")).unwrap();
+    let base = dir.path().join("base.npz");
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        dir.path().join("here.ogg").to_str().unwrap(),
+        "--end",
+        "8",
+        "-o",
+        base.to_str().unwrap(),
+        "-o",
+        dir.path().join("base.npy").to_str().unwrap(),
+    ]));
+    let manifest = dir.path().join("m.jsonl");
+    std::fs::write(
+        &manifest,
+        [
+            r#"{"id": "edited", "song": "here.ogg", "edit": "base.npz", "regenerate": ["2-4"], "seed": 5, "outputs": ["d.npy"]}"#,
+            r#"{"id": "posed", "song": "here.ogg", "end": 8, "keyframe": ["base.npz:30@5"], "keyframe_root": true, "outputs": ["d.npy"]}"#,
+        ]
+        .join("\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    ok(&dancegen(&[
+        "batch",
+        manifest.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let read = |p: &Path| dancegen_io::read_npy(p).unwrap().data;
+    let (old, edited) = (
+        read(&dir.path().join("base.npy")),
+        read(&out.join("edited/d.npy")),
+    );
+    assert_eq!(old.len(), edited.len());
+    let frame = 72;
+    for f in (0..old.len() / frame).filter(|f| !(60..120).contains(f)) {
+        for i in f * frame..(f + 1) * frame {
+            assert!((old[i] - edited[i]).abs() <= 1e-4, "frame {f} changed");
+        }
+    }
+    let posed = read(&out.join("posed/d.npy"));
+    let worst = (0..frame)
+        .map(|i| (posed[150 * frame + i] - old[30 * frame + i]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst <= 0.03, "the keyframe is missed by {worst} m");
+}

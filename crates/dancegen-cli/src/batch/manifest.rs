@@ -15,7 +15,17 @@ use serde_json::{Map, Value};
 use crate::cli::GenerateArgs;
 
 /// Keys holding a path: resolved against the manifest's folder (see [`resolve`]).
-const PATH_KEYS: [&str; 5] = ["song", "leader", "formation", "model", "character"];
+const PATH_KEYS: [&str; 9] = [
+    "song",
+    "leader",
+    "formation",
+    "model",
+    "character",
+    "edit",
+    "continue-from",
+    "from",
+    "path",
+];
 /// `generate` options a batch decides itself.
 const RESERVED_KEYS: [&str; 3] = ["output", "o", "progress"];
 
@@ -214,6 +224,12 @@ fn generate_args(fields: &Map<String, Value>, base: &Path) -> Result<Vec<String>
                 (Value::Bool(false), false) => continue,
                 (_, false) => return Err(format!("\"{key}\" is a switch: give true or false")),
                 (Value::String(s), true) if is_path => resolve(base, s)?,
+                // POSE[:N]@T: the pose file is a path.
+                (Value::String(s), true) if name == "keyframe" => {
+                    let (pose, frame, t) = dancegen_generate::edit::parse_keyframe_spec(s)?;
+                    let pose = resolve(base, &pose.display().to_string())?;
+                    format!("{pose}:{frame}@{t}")
+                }
                 (Value::String(s), true) => s.clone(),
                 (Value::Number(n), true) => n.to_string(),
                 (other, true) => return Err(format!("\"{key}\": {other} is not a value")),
