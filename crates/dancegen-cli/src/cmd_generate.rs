@@ -217,6 +217,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
             edit: Edit {
                 base: edited.map(|e| e.dance),
                 regenerate: args.regenerate.clone(),
+                extend: args.extend,
                 continue_from,
                 keep_joints,
                 keyframes,

@@ -496,3 +496,62 @@ fn a_duet_follower_is_edited_with_its_leader_given_again() {
     );
     assert!(!dir.path().join("x.npy").exists());
 }
+
+#[test]
+fn an_extended_dance_is_the_old_one_then_more_to_the_new_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--start",
+        "40",
+        "--end",
+        "50",
+        "-o",
+        &p("a.npz"),
+        "-o",
+        &p("a.npy"),
+    ]));
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("a.npz"),
+        "--extend",
+        "--end",
+        "56",
+        "--seed",
+        "1",
+        "-o",
+        &p("b.npy"),
+    ]));
+    let (sa, a) = npy(dir.path().join("a.npy").as_path());
+    let (sb, b) = npy(dir.path().join("b.npy").as_path());
+    assert_eq!((sa[0], sb[0]), (300, 480));
+    assert!(
+        a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-4),
+        "the first 10 s changed"
+    );
+    refused(
+        &[
+            "-q",
+            "generate",
+            "--edit",
+            &p("a.npz"),
+            "--extend",
+            "--end",
+            "50.2",
+            "-o",
+            &p("x.npy"),
+        ],
+        &["--extend", "later --end"],
+    );
+    refused(
+        &["-q", "generate", &s, "--extend", "-o", &p("x.npy")],
+        &["--edit"],
+    );
+    assert!(!dir.path().join("x.npy").exists());
+}

@@ -171,6 +171,7 @@ async fn submit(
     let leader_bytes = up.leader.map(|l| l.bytes);
     let max_seconds = s.limits.song_seconds;
     let edited_dir = edited.as_ref().map(|(row, _)| s.jobs.job_dir(&row.id));
+    let end = params.end;
     let prepared = {
         let (incoming, song_name, leader_name) =
             (incoming.clone(), song_name.clone(), leader_name.clone());
@@ -181,7 +182,7 @@ async fn submit(
             std::fs::create_dir_all(&incoming)
                 .map_err(|e| ApiError::internal(format!("{}: {e}", incoming.display())))?;
             if let (Some((row, e)), Some(from)) = (&edited, &edited_dir) {
-                return edit_job::take_files(from, row, e, &incoming);
+                return edit_job::take_files(from, row, e, end, &incoming);
             }
             let write = |name: &str, bytes: &[u8]| {
                 std::fs::write(incoming.join(name), bytes)

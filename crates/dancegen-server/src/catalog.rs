@@ -146,6 +146,7 @@ impl Catalog {
                     "edit": {
                         "regenerate": s.edits.contains(&edit::REGENERATE),
                         "keep": s.edits.contains(&edit::KEEP_JOINTS),
+                        "continue": s.edits.contains(&edit::EXTEND),
                     },
                 })
             })

@@ -60,6 +60,15 @@ pub fn edited_job(jobs: &Jobs, e: &EditParams) -> Result<JobRow, ApiError> {
             ),
         ));
     }
+    if e.extend && !info.edits.contains(&edit::EXTEND) {
+        return Err(ApiError::field(
+            "edit.continue",
+            format!(
+                "job {} is a {} dance, which cannot be continued yet",
+                e.of, row.params.system
+            ),
+        ));
+    }
     if e.keep.is_some() && !info.edits.contains(&edit::KEEP_JOINTS) {
         return Err(ApiError::field(
             "edit.keep",
@@ -73,8 +82,15 @@ pub fn edited_job(jobs: &Jobs, e: &EditParams) -> Result<JobRow, ApiError> {
 }
 
 /// Copies what the edit needs from the edited job's folder `from` into the new job's folder
-/// `to` (its song, leader and the dance), and checks the ranges against the dance.
-pub fn take_files(from: &Path, row: &JobRow, e: &EditParams, to: &Path) -> Result<(), ApiError> {
+/// `to` (its song, leader and the dance), and checks the ranges against the dance and, for a
+/// continuation, its new `end` (the song's end when `None`) against the dance's end.
+pub fn take_files(
+    from: &Path,
+    row: &JobRow,
+    e: &EditParams,
+    end: Option<f64>,
+    to: &Path,
+) -> Result<(), ApiError> {
     let copy = |name: &str, as_name: &str| {
         std::fs::copy(from.join(name), to.join(as_name))
             .map(|_| ())
@@ -94,9 +110,32 @@ pub fn take_files(from: &Path, row: &JobRow, e: &EditParams, to: &Path) -> Resul
         EDITED_DANCE,
     )?;
     let base = load_dance(to).map_err(|err| ApiError::field("edit.of", err.to_string()))?;
+    if e.extend {
+        let bytes: std::sync::Arc<[u8]> = std::fs::read(to.join(&row.song))
+            .map_err(|err| ApiError::internal(format!("reading the song: {err}")))?
+            .into();
+        let song = crate::upload::check_song(&row.song, bytes, f64::INFINITY)?;
+        let dance_end = row.params.start.unwrap_or(0.0) + base.seconds();
+        let new_end = end.unwrap_or(song).min(song);
+        if new_end < dance_end + edit::MIN_RANGE_SECONDS {
+            return Err(ApiError::field(
+                if end.is_some() {
+                    "end"
+                } else {
+                    "edit.continue"
+                },
+                format!(
+                    "the dance ends at {dance_end:.1} s of the song; a continuation needs an \
+                     end at least {} s later (the song is {song:.1} s)",
+                    edit::MIN_RANGE_SECONDS
+                ),
+            ));
+        }
+    }
     Edit {
         base: Some(base),
         regenerate: e.regenerate.clone(),
+        extend: e.extend,
         ..Edit::default()
     }
     .check()
@@ -131,6 +170,7 @@ pub fn library_edit(dir: &Path, e: &EditParams) -> Result<Edit, GenerateError> {
     Ok(Edit {
         base: Some(base),
         regenerate: e.regenerate.clone(),
+        extend: e.extend,
         keep_joints,
         ..Edit::default()
     })

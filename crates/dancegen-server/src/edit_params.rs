@@ -3,11 +3,14 @@
 //!
 //! ```json
 //! {"edit": {"of": "JOB_ID", "variation": 0, "regenerate": [[8, 12]], "keep": "arms"}}
+//! {"edit": {"of": "JOB_ID", "continue": true}, "end": 60}
 //! ```
 //!
 //! The new job dances to the song of the job it edits, with its system, dancers, start and end;
 //! `seed`, `steps`, `variations` and `mp4` are its own. `keep` keeps those joints of the old
-//! dance in the regenerated parts too (the web app's "keep arms" / "keep legs").
+//! dance in the regenerated parts too (the web app's "keep arms" / "keep legs"). `continue`
+//! keeps the whole dance and dances on to the job's own `end` (the song's end without one),
+//! as `--edit DANCE --extend` (the web app's "Continue").
 
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -18,7 +21,7 @@ use crate::error::ApiError;
 use crate::files::valid_id;
 
 /// The fields `edit` may have, for the error about an unknown one.
-const EDIT_FIELDS: &str = "of, variation, regenerate, keep";
+const EDIT_FIELDS: &str = "of, variation, regenerate, keep, continue";
 
 /// Most ranges one edit regenerates.
 pub const MAX_RANGES: usize = 16;
@@ -32,7 +35,15 @@ pub struct EditParams {
     #[serde(default)]
     pub variation: usize,
     /// Seconds from the dance's start to make new.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub regenerate: Vec<[f64; 2]>,
+    /// Keep the whole dance and dance on (to the new job's `end`).
+    #[serde(
+        default,
+        rename = "continue",
+        skip_serializing_if = "std::ops::Not::not"
+    )]
+    pub extend: bool,
     /// Joints the regenerated parts keep from the old dance (`arms`, `legs`, `upper`, `lower`
     /// or joint names, as `--keep-joints`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -77,7 +88,20 @@ impl EditParams {
                 ApiError::field("edit.variation", format!("{v}: need a whole number ≥ 0"))
             })? as usize,
         };
-        let regenerate = ranges(obj)?;
+        let extend = match obj.get("continue") {
+            None | Some(Value::Null) => false,
+            Some(Value::Bool(b)) => *b,
+            Some(v) => {
+                return Err(ApiError::field(
+                    "edit.continue",
+                    format!("{v}: need true or false"),
+                ));
+            }
+        };
+        let regenerate = match obj.get("regenerate") {
+            None | Some(Value::Null) if extend => Vec::new(),
+            _ => ranges(obj)?,
+        };
         let keep = match obj.get("keep") {
             None | Some(Value::Null) => None,
             Some(Value::String(s)) if s.trim().is_empty() => None,
@@ -91,6 +115,7 @@ impl EditParams {
             of,
             variation,
             regenerate,
+            extend,
             keep,
         })
     }
@@ -163,6 +188,7 @@ mod tests {
             of: "abc123".into(),
             variation: 1,
             regenerate: vec![[8.0, 12.0], [20.0, 21.5]],
+            extend: false,
             keep: Some("arms".into()),
         };
         let v = json!({"of": "abc123", "variation": 1, "regenerate": [[8, 12], [20, 21.5]], "keep": "arms"});
@@ -173,6 +199,10 @@ mod tests {
         );
         let plain = EditParams::parse(&json!({"of": "x1", "regenerate": [[1, 2]]})).unwrap();
         assert_eq!((plain.variation, plain.keep), (0, None));
+        let more = EditParams::parse(&json!({"of": "x1", "continue": true})).unwrap();
+        assert!(more.extend && more.regenerate.is_empty());
+        let text = serde_json::to_value(&more).unwrap();
+        assert_eq!(text, json!({"of": "x1", "variation": 0, "continue": true}));
     }
 
     #[test]
@@ -202,6 +232,8 @@ mod tests {
                 json!({"of": "x1", "regenerate": [[1, 2]], "variation": -1}),
                 "edit.variation",
             ),
+            (json!({"of": "x1", "continue": "yes"}), "edit.continue"),
+            (json!({"of": "x1", "continue": false}), "edit.regenerate"),
             (
                 json!({"of": "x1", "regenerate": [[1, 2]], "seed": 3}),
                 "edit.seed",

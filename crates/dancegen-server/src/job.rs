@@ -133,8 +133,12 @@ impl JobParams {
             None | Some(Value::Null) => None,
             Some(v) => Some(EditParams::parse(v)?),
         };
+        // A continued dance goes on to its own end.
+        let own = |k: &&&str| **k == "end" && edit.as_ref().is_some_and(|e| e.extend);
         if edit.is_some()
-            && let Some(k) = FROM_THE_EDITED_JOB.iter().find(|k| obj.contains_key(**k))
+            && let Some(k) = FROM_THE_EDITED_JOB
+                .iter()
+                .find(|k| obj.contains_key(**k) && !own(k))
         {
             return Err(ApiError::field(
                 k,
@@ -243,13 +247,15 @@ impl JobParams {
     }
 
     /// These params as an edit of the job whose params are `edited`: its system, dancers,
-    /// genre, start and end.
+    /// genre, start and end (a continuation keeps its own end).
     pub fn editing(mut self, edited: &JobParams) -> Self {
         self.system = edited.system.clone();
         self.dancers = edited.dancers;
         self.genre = edited.genre.clone();
         self.start = edited.start;
-        self.end = edited.end;
+        if !self.edit.as_ref().is_some_and(|e| e.extend) {
+            self.end = edited.end;
+        }
         self
     }
 

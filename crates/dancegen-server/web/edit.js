@@ -7,6 +7,7 @@
  *   GET  api/systems              → which systems edit (`edit: {regenerate, keep}` per system)
  *   POST api/jobs                 multipart `params` only: {seed, edit: {of, variation,
  *                                 regenerate: [[from, to]], keep?}} → 202 {id} | 4xx {error, field}
+ *                                 or {seed, end, edit: {of, variation, continue: true}}
  *   GET  api/jobs/<id>/versions   → {versions: [{id, number, state, seed, edit?, created}]}
  *
  * Times are seconds from the dance's start (the clock the viewer shows), as `edit.regenerate`
@@ -25,6 +26,7 @@ const tenth = (s) => Math.round(s * 10) / 10;
 /** What a version changed, in words: "3.0–6.0 s made new, arms kept". */
 export function describeEdit(edit) {
   if (!edit) return 'the first dance';
+  if (edit.continue && !(edit.regenerate ?? []).length) return 'continued';
   const parts = (edit.regenerate ?? []).map(([a, b]) => `${formatTime(a)}–${formatTime(b)}`).join(', ');
   const keep = edit.keep ? `, ${edit.keep} kept` : '';
   const of = edit.variation ? ` of variation ${edit.variation + 1}` : '';
@@ -64,6 +66,7 @@ export class EditPanel {
     this.box.hidden = !edit.regenerate;
     $('edit-keep-field').hidden = !edit.keep;
     $('edit-keep').value = '';
+    $('continue-fields').hidden = !edit.continue;
     if (edit.regenerate) this.wire();
     await this.showVersions();
   }
@@ -98,6 +101,14 @@ export class EditPanel {
     on($('mark-from'), 'click', () => this.mark(this.from));
     on($('mark-to'), 'click', () => this.mark(this.to));
     on($('regenerate'), 'click', () => this.regenerate());
+    // Continue: by default 10 s more, or to the song's end.
+    const songEnd = this.viewer.audio.duration;
+    const danceEnd = this.viewer.start + duration;
+    const more = $('continue-to');
+    more.min = String(tenth(danceEnd + MIN_PART_S));
+    if (Number.isFinite(songEnd)) more.max = String(tenth(songEnd));
+    more.value = String(tenth(Number.isFinite(songEnd) ? Math.min(songEnd, danceEnd + 10) : danceEnd + 10));
+    on($('continue'), 'click', () => this.extend());
     this.showSelection();
   }
 
@@ -124,6 +135,47 @@ export class EditPanel {
     this.band.title = `${formatTime(a)} – ${formatTime(b)} will be made new`;
   }
 
+  /** Continues the dance to the chosen time of the song, as a new version. */
+  async extend() {
+    this.page.clearNotice();
+    const end = Number($('continue-to').value);
+    const danceEnd = this.viewer.start + this.viewer.duration;
+    if (!(end >= danceEnd + MIN_PART_S)) {
+      this.page.notice(`The dance ends at ${formatTime(danceEnd)} of the song; continue it to at least ${formatTime(danceEnd + MIN_PART_S)}.`);
+      $('continue-to').setAttribute('aria-invalid', 'true');
+      return;
+    }
+    $('continue-to').removeAttribute('aria-invalid');
+    const edit = { of: this.job.id, continue: true };
+    const variation = Number($('edit-variation').value) || 0;
+    if (variation > 0) edit.variation = variation;
+    await this.send({ edit, end }, $('continue'), 'Continue the dance');
+  }
+
+  /** Submits `params` (plus the seed); the new version opens when it is accepted. */
+  async send(params, button, label) {
+    const seed = Number($('edit-seed').value);
+    if (Number.isInteger(seed) && seed >= 0) params.seed = seed;
+    const body = new FormData();
+    body.append('params', JSON.stringify(params));
+    button.disabled = true;
+    button.textContent = 'Sending…';
+    try {
+      const res = await fetch('api/jobs', { method: 'POST', body });
+      const reply = await res.json().catch(() => ({}));
+      if (!res.ok) {
+        this.page.notice(`The new version was refused: ${reply.error ?? `HTTP ${res.status}`}`);
+        return;
+      }
+      this.page.open(`?job=${encodeURIComponent(reply.id)}`);
+    } catch (e) {
+      this.page.notice(`The edit did not reach the server (${e.message}). Is \`dancegen serve\` still running?`);
+    } finally {
+      button.disabled = false;
+      button.textContent = label;
+    }
+  }
+
   /** Checks the part, then submits the edit; the new version opens when it is accepted. */
   async regenerate() {
     this.page.clearNotice();
@@ -142,33 +194,12 @@ export class EditPanel {
     if (b > d + 0.05) return fail(`The dance is ${formatTime(d)} long; the part must end inside it.`, 'edit-to');
     if (b - a < MIN_PART_S) return fail(`The part is ${(b - a).toFixed(1)} s; make it at least ${MIN_PART_S} s.`, 'edit-to');
     for (const id of ['edit-from', 'edit-to']) $(id).removeAttribute('aria-invalid');
-    const seed = Number($('edit-seed').value);
     const edit = { of: this.job.id, regenerate: [[a, Math.min(b, d)]] };
     const variation = Number($('edit-variation').value) || 0;
     if (variation > 0) edit.variation = variation;
     const keep = $('edit-keep').value;
     if (keep && !$('edit-keep-field').hidden) edit.keep = keep;
-    const params = { edit };
-    if (Number.isInteger(seed) && seed >= 0) params.seed = seed;
-    const body = new FormData();
-    body.append('params', JSON.stringify(params));
-    const button = $('regenerate');
-    button.disabled = true;
-    button.textContent = 'Sending…';
-    try {
-      const res = await fetch('api/jobs', { method: 'POST', body });
-      const reply = await res.json().catch(() => ({}));
-      if (!res.ok) {
-        fail(`The new part was refused: ${reply.error ?? `HTTP ${res.status}`}`);
-        return;
-      }
-      this.page.open(`?job=${encodeURIComponent(reply.id)}`);
-    } catch (e) {
-      fail(`The edit did not reach the server (${e.message}). Is \`dancegen serve\` still running?`);
-    } finally {
-      button.disabled = false;
-      button.textContent = 'Regenerate this part';
-    }
+    await this.send({ edit }, $('regenerate'), 'Regenerate this part');
   }
 
   /** The versions of this dance, each to open or to compare with the open one. */

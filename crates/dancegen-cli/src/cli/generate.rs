@@ -71,11 +71,15 @@ pub struct GenerateArgs {
     #[arg(long, value_name = "DIR")]
     pub model: Option<PathBuf>,
     /// Edit this dance: keep it, except the --regenerate ranges, which are made new to join
-    /// it. A .npz that dancegen wrote records its song, --start, system, model and seed, and
+    /// it (or continue it: --extend). A .npz that dancegen wrote records its song, --start, system, model and seed, and
     /// they are used unless given; any other motion `convert` reads needs SONG (and --start
     /// if it does not dance from the song's start). See "Edits" below for the systems.
-    #[arg(long, value_name = "DANCE", requires = "regenerate")]
+    #[arg(long, value_name = "DANCE")]
     pub edit: Option<PathBuf>,
+    /// With --edit: keep the whole dance and dance on to --end (the song's end by default),
+    /// e.g. a 30 s dance continued to a minute.
+    #[arg(long, requires = "edit")]
+    pub extend: bool,
     /// With --edit: seconds A-B of the dance to make new, e.g. 8-12 (repeatable; at least
     /// 0.5 s each, inside the dance, not overlapping).
     #[arg(long, value_name = "A-B", requires = "edit", value_parser = parse_range)]

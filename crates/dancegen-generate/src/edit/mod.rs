@@ -34,12 +34,13 @@ use crate::song::{FPS, Span};
 
 /// The operations, as [`Edit::operations`] and `DanceSystem::EDITS` name them.
 pub const REGENERATE: &str = "--edit/--regenerate";
+pub const EXTEND: &str = "--edit/--extend";
 pub const CONTINUE: &str = "--continue-from";
 pub const KEEP_JOINTS: &str = "--keep-joints";
 pub const KEYFRAME: &str = "--keyframe";
 pub const PATH: &str = "--path";
 /// Every operation, in the order tables list them.
-pub const OPERATIONS: [&str; 5] = [REGENERATE, CONTINUE, KEEP_JOINTS, KEYFRAME, PATH];
+pub const OPERATIONS: [&str; 6] = [REGENERATE, EXTEND, CONTINUE, KEEP_JOINTS, KEYFRAME, PATH];
 
 /// Shortest range `--regenerate` accepts: shorter is a twitch, not a new phrase.
 pub const MIN_RANGE_SECONDS: f64 = 0.5;
@@ -55,6 +56,9 @@ pub struct Edit {
     pub base: Option<GivenMotion>,
     /// `--regenerate A-B`: seconds from the dance's start to make new.
     pub regenerate: Vec<[f64; 2]>,
+    /// `--extend`: the dance being edited is kept and danced on to `--end` (the song's end
+    /// by default): the web app's "Continue".
+    pub extend: bool,
     /// `--continue-from`: the new dance starts with this motion's last [`CONTINUE_SECONDS`],
     /// unchanged, and continues from there.
     pub continue_from: Option<GivenMotion>,
@@ -96,9 +100,10 @@ impl Edit {
     pub fn operations(&self) -> Vec<&'static str> {
         [
             (
-                self.base.is_some() || !self.regenerate.is_empty(),
+                !self.regenerate.is_empty() || (self.base.is_some() && !self.extend),
                 REGENERATE,
             ),
+            (self.extend, EXTEND),
             (self.continue_from.is_some(), CONTINUE),
             (self.keep_joints.is_some(), KEEP_JOINTS),
             (
@@ -131,13 +136,17 @@ impl Edit {
             (None, false) => {
                 return bad("--regenerate needs the dance to edit: --edit DANCE".into());
             }
-            (Some(b), true) => {
+            (Some(b), true) if !self.extend => {
                 return bad(format!(
-                    "--edit {}: say what to make new with --regenerate A-B (seconds)",
+                    "--edit {}: say what to make new with --regenerate A-B (seconds), or \
+                     continue it with --extend",
                     b.label
                 ));
             }
             _ => {}
+        }
+        if self.extend && self.base.is_none() {
+            return bad("--extend continues the dance of --edit DANCE; give it".into());
         }
         if let (Some(_), Some(c)) = (&self.base, &self.continue_from) {
             return bad(format!(
@@ -217,6 +226,11 @@ impl Edit {
 
     /// The frames `--edit` or `--continue-from` keep whole (none without them).
     fn kept_frames(&self, frames: usize) -> Result<KnownParts, GenerateError> {
+        if let Some(b) = &self.base
+            && self.extend
+        {
+            return self.extended(b, frames);
+        }
         if let Some(b) = &self.base {
             let have = b.motion.frames();
             if frames != have {
@@ -262,6 +276,41 @@ impl Edit {
                 let pose = &src.poses[g * POSE_DIMS..(g + 1) * POSE_DIMS];
                 k.set(f, ALL_JOINTS, [true, true], pose, trans);
             }
+        }
+        Ok(k)
+    }
+
+    /// `--extend`: the dance being edited kept whole as the first frames of `frames`, its
+    /// `--regenerate` ranges made new, the rest new.
+    fn extended(&self, b: &GivenMotion, frames: usize) -> Result<KnownParts, GenerateError> {
+        let have = b.motion.frames();
+        let more = frames as f64 / f64::from(FPS) - b.seconds();
+        if more < MIN_RANGE_SECONDS {
+            return Err(GenerateError::Invalid(format!(
+                "--extend: the song from --start to --end gives {:.2} s, {:.2} s more than the \
+                 dance ({}); give a later --end (at least {MIN_RANGE_SECONDS} s more)",
+                frames as f64 / f64::from(FPS),
+                more.max(0.0),
+                b.label
+            )));
+        }
+        let empty = SmplMotion::new(
+            FPS as f32,
+            vec![0.0; frames * POSE_DIMS],
+            vec![0.0; frames * 3],
+        )
+        .map_err(|e| GenerateError::Generation(e.to_string()))?;
+        let mut k = KnownParts::none(empty);
+        let src = &b.motion;
+        let made = |f: usize| {
+            self.regenerate
+                .iter()
+                .any(|&[a, e]| (seconds_to_frame(a, have)..seconds_to_frame(e, have)).contains(&f))
+        };
+        for f in (0..have).filter(|&f| !made(f)) {
+            let trans = [0, 1, 2].map(|i| src.trans[f * 3 + i]);
+            let pose = &src.poses[f * POSE_DIMS..(f + 1) * POSE_DIMS];
+            k.set(f, ALL_JOINTS, [true, true], pose, trans);
         }
         Ok(k)
     }
@@ -690,5 +739,36 @@ mod tests {
         });
         let k = edit.known(&span(300), 100.0).unwrap().unwrap();
         assert!(k.kept(59) && k.joints[60] == arms && !k.root_horizontal[60] && k.kept(120));
+    }
+
+    #[test]
+    fn an_extended_dance_keeps_all_of_the_old_one_first_and_makes_the_rest() {
+        let mut edit = Edit {
+            base: Some(given(300)),
+            extend: true,
+            ..Edit::default()
+        };
+        assert_eq!(edit.operations(), vec![EXTEND]);
+        let k = edit.known(&span(450), 100.0).unwrap().unwrap();
+        assert!((0..300).all(|f| k.kept(f)) && (300..450).all(|f| !k.touched(f)));
+        let base = &edit.base.as_ref().unwrap().motion;
+        assert_eq!(k.motion.poses[..300 * 72], base.poses[..]);
+        let e = edit.known(&span(310), 100.0).unwrap_err().to_string();
+        assert!(e.contains("--extend") && e.contains("later --end"), "{e}");
+        edit.regenerate = vec![[2.0, 4.0]];
+        assert_eq!(edit.operations(), vec![REGENERATE, EXTEND]);
+        let k = edit.known(&span(450), 100.0).unwrap().unwrap();
+        assert!(k.kept(59) && !k.touched(60) && k.kept(120));
+        let alone = Edit {
+            extend: true,
+            ..Edit::default()
+        };
+        assert!(
+            alone
+                .check()
+                .unwrap_err()
+                .to_string()
+                .contains("--edit DANCE")
+        );
     }
 }

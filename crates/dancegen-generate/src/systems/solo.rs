@@ -71,6 +71,7 @@ impl DanceSystem for Solo {
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
     const EDITS: &'static [&'static str] = &[
         edit::REGENERATE,
+        edit::EXTEND,
         edit::CONTINUE,
         edit::KEEP_JOINTS,
         edit::KEYFRAME,
@@ -192,6 +193,8 @@ fn edit(
     let common = input.common;
     let song = input.song;
     let span = match (common.edit.base.as_ref(), common.edit.kept_joints_frames()) {
+        // Continued: the dance from its start to --end (the song's end by default).
+        (Some(_), _) if common.edit.extend => song.span(common.start, common.end)?,
         (Some(b), _) => song.span_of_frames(common.start, b.motion.frames())?,
         // Kept joints without --end: the dance lasts as long as their motion (or the song).
         (None, Some(n)) if common.end.is_none() => {

@@ -12,7 +12,7 @@
  * the two dances' titles and download links. Screenshots: <out_dir>/selection.png,
  * edited.png, compare.png. Prints ONE JSON line:
  *
- *   {"edited": new job id, "selection": {"hidden", "left", "width"},
+ *   {"edited": new job id, "selection": {"hidden", "left", "width"}, "continueShown",
  *    "versions": [text of each item], "compare": {"url", "titles", "downloads": [count each],
  *    "figures"}, "requests": [...], "errors": [...]}
  *
@@ -85,6 +85,7 @@ try {
       await page.click('#mark-to');
       await page.select('#edit-keep', 'arms');
       result.selection = await page.$eval('#selection', (b) => ({ hidden: b.hidden, left: b.style.left, width: b.style.width }));
+      result.continueShown = await page.$eval('#continue-fields', (b) => !b.hidden);
       await shot('selection.png');
     });
     await step('regenerate and open the new version', EDIT_TIMEOUT_MS, async () => {

@@ -395,6 +395,28 @@ fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
     }
     assert_eq!(s.get("/api/jobs/nosuchjob/versions").status, 404);
 
+    // "Continue": the whole dance, then more of it to the new end.
+    let params = format!(r#"{{"end": 14, "edit": {{"of": "{id}", "continue": true}}}}"#);
+    let r = s.submit(&[("params", None, params.as_bytes())]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let cid = r.json["id"].as_str().unwrap().to_string();
+    let continued = s.wait(&cid, JOB_TIMEOUT);
+    assert_eq!(continued["state"], "done", "{continued}");
+    assert_eq!(continued["params"]["end"], 14.0);
+    let longer = npy(&continued);
+    assert_eq!(longer.len(), 420 * frame, "14 s of dance");
+    assert!(
+        old.iter().zip(&longer).all(|(a, b)| (a - b).abs() <= 1e-4),
+        "the first 10 s changed"
+    );
+    let r = s.submit(&[(
+        "params",
+        None,
+        format!(r#"{{"end": 10.2, "edit": {{"of": "{id}", "continue": true}}}}"#).as_bytes(),
+    )]);
+    assert_eq!(r.status, 400, "{}", r.json);
+    assert_eq!(r.json["field"], "end", "{}", r.json);
+
     for (params, field) in [
         (
             r#"{"edit": {"of": "nosuchjob", "regenerate": [[1, 2]]}}"#.to_string(),

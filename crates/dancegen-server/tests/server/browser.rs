@@ -252,6 +252,11 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
         "selection starts at {sel}"
     );
 
+    assert_eq!(
+        report["continueShown"], true,
+        "a solo dance can be continued"
+    );
+
     // The new version is a job that edits this one, made from the marks.
     let eid = report["edited"].as_str().expect("a new version opened");
     assert_ne!(eid, id);
