@@ -131,6 +131,8 @@ fn a_regenerated_range_of_the_follower_is_new_and_joins_the_kept_frames() {
     let seeds = pose_difference(&jo, &other, made.clone());
     eprintln!("duet regenerate: {q:?}; another seed differs by {seeds:.3} m there");
     assert!(q.kept_max_m <= 1e-4, "{q:?}");
+    let ratio = q.join_jerk_ratio.expect("joins inside the dance");
+    assert!(ratio < 1.5, "boundary jerk ratio {ratio:.2} at the joins");
     assert!(
         q.join_root_step_m <= q.other_root_step_m + 0.05,
         "root step {:.3} m at a join against {:.3} m elsewhere",

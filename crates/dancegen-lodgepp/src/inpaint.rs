@@ -32,7 +32,7 @@ use burn::tensor::Device;
 use crate::bundle::SoloModel;
 use crate::choreo_gpt::MUSIC_DIMS;
 use crate::config::BOUNDARY_FRAMES;
-use crate::layout::{DIMS, ROOT_HORIZONTAL};
+use crate::layout::{DIMS, ROOT_HEIGHT, ROOT_HORIZONTAL};
 use crate::pipeline::{CuedWindow, GenerateOptions};
 use crate::primitives::WindowPrimitives;
 use crate::rotation_tracks::bridge_short_rows;
@@ -209,7 +209,7 @@ impl SoloModel {
                 &mut x[..span * DIMS],
                 span,
                 &[CuedFrames { head, tail }],
-                SeamBlend::Hermite,
+                SeamBlend::Quintic,
             );
             for f in x.chunks_mut(DIMS) {
                 for (k, &c) in ROOT_HORIZONTAL.iter().enumerate() {
@@ -263,7 +263,7 @@ impl SoloModel {
             lock_feet_in_runs(&mut buf, known, &runs, opts);
         }
         for r in &runs {
-            hand_over_root_velocity(&mut buf, known, r.a, r.b);
+            hand_over_root(&mut buf, known, r.a, r.b);
         }
         Ok(Inpainted {
             frames: buf,
@@ -317,7 +317,7 @@ pub fn join_made_runs(generated: &[f32], known: &KnownFrames) -> (Vec<f32>, f32)
             &mut x,
             hi - lo,
             &[CuedFrames { head, tail }],
-            SeamBlend::Hermite,
+            SeamBlend::Quintic,
         );
         if head == 0 {
             for row in x[..(b - lo) * DIMS].chunks_mut(DIMS) {
@@ -353,7 +353,7 @@ pub fn join_made_runs(generated: &[f32], known: &KnownFrames) -> (Vec<f32>, f32)
     }
     let largest = join_runs(&mut buf, known, &runs);
     for r in &runs {
-        hand_over_root_velocity(&mut buf, known, r.a, r.b);
+        hand_over_root(&mut buf, known, r.a, r.b);
     }
     (buf, largest)
 }
@@ -490,37 +490,53 @@ fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], opts: &
     }
 }
 
-/// Frames over which a run's root velocity is handed over to the kept frames'.
+/// Frames over which a run's root motion is handed over to the kept frames'.
 pub const VELOCITY_HANDOVER_FRAMES: usize = 16;
 
-/// Makes the root's horizontal velocity continuous where the made run `[a, b)` meets kept
-/// frames whose root is known: the run's first (last) frame is moved so that its step from
-/// (to) the kept frame is the kept frames' own step, and the move fades out into the run over
-/// [`VELOCITY_HANDOVER_FRAMES`] (weight `(1 − k/L)²`, no jump of its own). The positions at
-/// the joins already meet ([`join_runs`]); this removes the kink of velocity there.
-fn hand_over_root_velocity(buf: &mut [f32], known: &KnownFrames, a: usize, b: usize) {
+/// Makes the root continue the kept frames where the made run `[a, b)` meets them: at an end
+/// with three kept frames next to it, the run's root (each channel the kept frames know: the
+/// floor position, the height) is offset so that its position, velocity and acceleration
+/// there continue the kept frames' (the offset of a quintic Hermite curve over
+/// [`VELOCITY_HANDOVER_FRAMES`], which vanishes with its first two derivatives at the far
+/// end). [`join_runs`] has already made the positions meet; a jump of velocity or
+/// acceleration left at a join is a spike of jerk.
+fn hand_over_root(buf: &mut [f32], known: &KnownFrames, a: usize, b: usize) {
     let total = buf.len() / DIMS;
-    let root = |buf: &[f32], f: usize| ROOT_HORIZONTAL.map(|c| buf[f * DIMS + c]);
     let len = (b - a).min(VELOCITY_HANDOVER_FRAMES);
-    let weight = |k: usize| {
-        let u = 1.0 - k as f32 / len.max(1) as f32;
-        u * u
-    };
-    if a >= 2 && known.root_known(a - 1) && known.root_known(a - 2) && !known.root_known(a) {
-        let (p2, p1, p0) = (root(buf, a - 2), root(buf, a - 1), root(buf, a));
-        let d = [0, 1].map(|i| (p1[i] - p2[i]) - (p0[i] - p1[i]));
-        for k in 0..len {
-            for (i, &c) in ROOT_HORIZONTAL.iter().enumerate() {
-                buf[(a + k) * DIMS + c] += d[i] * weight(k);
-            }
-        }
+    if len < 3 {
+        return;
     }
-    if b + 1 < total && known.root_known(b) && known.root_known(b + 1) && b > a {
-        let (p0, p1, p2) = (root(buf, b - 1), root(buf, b), root(buf, b + 1));
-        let d = [0, 1].map(|i| (p1[i] - p0[i]) - (p2[i] - p1[i]));
-        for k in 0..len {
-            for (i, &c) in ROOT_HORIZONTAL.iter().enumerate() {
-                buf[(b - 1 - k) * DIMS + c] += d[i] * weight(k);
+    let channels: Vec<usize> = ROOT_HORIZONTAL
+        .iter()
+        .copied()
+        .chain([ROOT_HEIGHT])
+        .collect();
+    let kept = |f: usize, c: usize| known.mask[f * DIMS + c] > 0.0;
+    // (the kept frames outward from the join, the run's frames outward from it)
+    let mut ends: Vec<([usize; 3], Vec<usize>)> = Vec::new();
+    if a >= 3 {
+        ends.push(([a - 1, a - 2, a - 3], (a..a + len).collect()));
+    }
+    if b + 3 <= total {
+        ends.push(([b, b + 1, b + 2], (b - len..b).rev().collect()));
+    }
+    for (k3, run) in ends {
+        for &c in &channels {
+            if !k3.iter().all(|&f| kept(f, c)) || kept(run[0], c) {
+                continue;
+            }
+            let x = |f: usize| f64::from(buf[f * DIMS + c]);
+            let (p1, p2, p3) = (x(k3[0]), x(k3[1]), x(k3[2]));
+            let (v, acc) = (p1 - p2, p1 - 2.0 * p2 + p3);
+            let (g0, g1, g2) = (x(run[0]), x(run[1]), x(run[2]));
+            // Near the join the offset is d0 + d1·k + d2·k²/2: its first step is d1 + d2/2,
+            // its second difference d2.
+            let d0 = p1 + v + acc - g0;
+            let d2 = acc - (g2 - 2.0 * g1 + g0);
+            let d1 = v + 2.0 * acc - (g1 - g0) - d2 / 2.0;
+            for (k, &f) in run.iter().enumerate() {
+                let (w, wv, wa) = crate::seams::quintic(k as f64 / len as f64, len as f64);
+                buf[f * DIMS + c] += (d0 * w + d1 * wv + d2 * wa) as f32;
             }
         }
     }
@@ -746,5 +762,51 @@ mod tests {
             largest > 0.0 && largest < 0.5,
             "largest join move {largest}"
         );
+    }
+
+    #[test]
+    fn the_root_is_handed_over_with_its_velocity_and_acceleration() {
+        // Kept: frames 0..10 accelerate along x (x = 0.001 f²); made: 10..60 at rest at the
+        // kept path's end.
+        let t = 60;
+        let mut buf = vec![0f32; t * DIMS];
+        let mut mask = vec![0f32; t * DIMS];
+        for f in 0..t {
+            let x = 0.001 * (f.min(9) * f.min(9)) as f32;
+            buf[f * DIMS + ROOT_HORIZONTAL[0]] = x;
+            if f < 10 {
+                mask[f * DIMS..(f + 1) * DIMS].fill(1.0);
+            }
+        }
+        let known = KnownFrames {
+            values: buf.clone(),
+            mask,
+        };
+        hand_over_root(&mut buf, &known, 10, t);
+        let x: Vec<f64> = (0..t)
+            .map(|f| f64::from(buf[f * DIMS + ROOT_HORIZONTAL[0]]))
+            .collect();
+        assert!((0..10).all(|f| x[f] == f64::from(known.values[f * DIMS + ROOT_HORIZONTAL[0]])));
+        // Velocity and acceleration go on through the join: its first step and second
+        // difference are the kept path's continued, and the third differences there (jerk)
+        // are of the order of the hand-over's own, which brings the run to rest (the old
+        // hand-over, a velocity fix alone, left a jerk seven times that here: 0.019).
+        let (step, second) = (x[10] - x[9], x[11] - 2.0 * x[10] + x[9]);
+        assert!((step - 0.019).abs() < 2e-4, "step {step} into the run");
+        assert!(
+            (second - 0.002).abs() < 1e-3,
+            "second difference {second} at the join"
+        );
+        let jerk = |f: usize| (x[f + 3] - 3.0 * x[f + 2] + 3.0 * x[f + 1] - x[f]).abs();
+        let at_join = (6..10).map(jerk).fold(0.0, f64::max);
+        let blend = (10..10 + VELOCITY_HANDOVER_FRAMES - 3)
+            .map(jerk)
+            .fold(0.0, f64::max);
+        assert!(
+            at_join <= 1.5 * blend,
+            "third difference {at_join} at the join, {blend} after"
+        );
+        // Past the hand-over the run is where it was.
+        assert!((VELOCITY_HANDOVER_FRAMES + 10..t).all(|f| (x[f] - 0.081).abs() < 1e-6));
     }
 }

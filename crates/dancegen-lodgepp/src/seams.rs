@@ -78,6 +78,11 @@ pub enum SeamBlend {
     /// network's velocity at a join can be half theirs; with [`SeamBlend::Fade`] the joins of
     /// a regenerated range had a boundary-jerk ratio of 2-5).
     Hermite,
+    /// [`SeamBlend::Hermite`] plus the difference of the angular accelerations, faded out by
+    /// quintic Hermite curves, so that the acceleration continues the cued frames too: a jump
+    /// of acceleration at a join is a spike of jerk, the quantity the boundary-jerk ratio
+    /// measures.
+    Quintic,
 }
 
 /// [`anchor_windows`] with the rotation blend chosen.
@@ -167,6 +172,19 @@ fn fade(k: usize) -> f32 {
     0.5 + 0.5 * (std::f32::consts::PI * k as f32 / BLEND_FRAMES as f32).cos()
 }
 
+/// Quintic Hermite weights at `u = k / len`: value 1 (first), slope 1 per frame (second) and
+/// curvature 1 per frame² (third) at the seam, each with the other two derivatives 0 there;
+/// all three reach 0 with zero slope and curvature at `u = 1`.
+pub(crate) fn quintic(u: f64, len: f64) -> (f64, f64, f64) {
+    let u = u.clamp(0.0, 1.0);
+    let (u2, u3, u4, u5) = (u * u, u.powi(3), u.powi(4), u.powi(5));
+    (
+        1.0 - 10.0 * u3 + 15.0 * u4 - 6.0 * u5,
+        len * (u - 6.0 * u3 + 8.0 * u4 - 3.0 * u5),
+        len * len * (0.5 * u2 - 1.5 * u3 + 1.5 * u4 - 0.5 * u5),
+    )
+}
+
 /// Cubic Hermite weights at `u = k / len`: the first has value 1 and slope 0 at the seam
 /// (`h00`), the second value 0 and slope 1 per frame (`len · h10`); both reach 0 with zero
 /// slope at `u = 1`.
@@ -195,10 +213,11 @@ fn set_rotation(win: &mut [f32], f: usize, j: usize, r: &Mat3) {
 /// blending 6D vectors linearly can pass near degenerate ones when the two sides disagree.
 fn blend_rotation_seams(win: &mut [f32], n: usize, head: usize, tail: usize, blend: SeamBlend) {
     let (first, last) = (head, n - tail - 1);
-    // (cued frame next to the seam, the cued frame before it if any, generated frames outward)
-    let mut seams: Vec<(usize, Option<usize>, Vec<usize>)> = Vec::new();
+    // (cued frame next to the seam, the cued frames before it if any (nearest first),
+    // generated frames outward)
+    let mut seams: Vec<(usize, Vec<usize>, Vec<usize>)> = Vec::new();
     if head > 0 {
-        let before = (head >= 2).then(|| head - 2);
+        let before = (0..head - 1).rev().take(2).collect();
         seams.push((
             head - 1,
             before,
@@ -207,20 +226,21 @@ fn blend_rotation_seams(win: &mut [f32], n: usize, head: usize, tail: usize, ble
     }
     if tail > 0 {
         let c = n - tail;
-        let before = (c + 1 < n).then_some(c + 1);
+        let before = (c + 1..n).take(2).collect();
         seams.push((c, before, (first..=last).rev().take(BLEND_FRAMES).collect()));
     }
     for j in 0..24 {
         for (cue, before, frames) in &seams {
             let rc = rotation(win, *cue, j);
-            let step = before.map_or(Mat3::IDENTITY, |b| rc.mul(&rotation(win, b, j).transpose()));
+            let step_of = |a: &Mat3, b: usize| a.mul(&rotation(win, b, j).transpose());
+            let step = before.first().map_or(Mat3::IDENTITY, |&b| step_of(&rc, b));
             let target = step.mul(&rc);
             let offset = target.mul(&rotation(win, frames[0], j).transpose());
             let aa = offset.to_axis_angle();
             // Hermite: the velocity mismatch, cued step minus generated step (both in the
             // direction away from the cue, as rotation vectors), also faded in.
             let dv = match (blend, frames.get(1)) {
-                (SeamBlend::Hermite, Some(&g1)) => {
+                (SeamBlend::Hermite | SeamBlend::Quintic, Some(&g1)) => {
                     let cued = step.to_axis_angle();
                     let made = rotation(win, g1, j)
                         .mul(&rotation(win, frames[0], j).transpose())
@@ -229,13 +249,33 @@ fn blend_rotation_seams(win: &mut [f32], n: usize, head: usize, tail: usize, ble
                 }
                 _ => [0.0; 3],
             };
+            // Quintic: the acceleration mismatch, the cued frames' change of step minus the
+            // generated frames' (rotation vectors per frame²).
+            let da = match (blend, before.get(1), frames.get(1), frames.get(2)) {
+                (SeamBlend::Quintic, Some(&b2), Some(&g1), Some(&g2)) => {
+                    let b1 = before[0];
+                    let older = rotation(win, b1, j).mul(&rotation(win, b2, j).transpose());
+                    let (s1, s0) = (step.to_axis_angle(), older.to_axis_angle());
+                    let r = |f: usize| rotation(win, f, j);
+                    let m1 = r(g1).mul(&r(frames[0]).transpose()).to_axis_angle();
+                    let m2 = r(g2).mul(&r(g1).transpose()).to_axis_angle();
+                    std::array::from_fn(|i| (s1[i] - s0[i]) - (m2[i] - m1[i]))
+                }
+                _ => [0.0; 3],
+            };
             let len = frames.len().max(1) as f64;
             for (k, &f) in frames.iter().enumerate() {
-                let (w, wv) = match blend {
-                    SeamBlend::Fade => (f64::from(fade(k)), 0.0),
-                    SeamBlend::Hermite => hermite(k as f64 / len, len),
+                let (w, wv, wa) = match blend {
+                    SeamBlend::Fade => (f64::from(fade(k)), 0.0, 0.0),
+                    SeamBlend::Hermite => {
+                        let (w, wv) = hermite(k as f64 / len, len);
+                        (w, wv, 0.0)
+                    }
+                    SeamBlend::Quintic => quintic(k as f64 / len, len),
                 };
-                let turn = Mat3::from_axis_angle(std::array::from_fn(|i| aa[i] * w + dv[i] * wv));
+                let turn = Mat3::from_axis_angle(std::array::from_fn(|i| {
+                    aa[i] * w + dv[i] * wv + da[i] * wa
+                }));
                 let r = turn.mul(&rotation(win, f, j));
                 set_rotation(win, f, j, &r);
             }

@@ -266,7 +266,7 @@ fn edit(
 pub const EDIT_FLOOR_BLEND_FRAMES: usize = 15;
 
 /// The made frames of an edit stand on the floor as a whole generation does
-/// ([`SmplMotion::put_feet_on_tracked_floor`]), with the correction faded in (smoothstep) over
+/// ([`SmplMotion::put_feet_on_tracked_floor`]), with the correction faded in (smootherstep) over
 /// [`EDIT_FLOOR_BLEND_FRAMES`] from each kept frame, whose heights must not change.
 fn floor_made_frames(m: &mut SmplMotion, made: &[bool]) -> Result<(), GenerateError> {
     let mut tracked = m.clone();
@@ -281,8 +281,9 @@ fn floor_made_frames(m: &mut SmplMotion, made: &[bool]) -> Result<(), GenerateEr
             .map(|&k| k.abs_diff(f))
             .min()
             .unwrap_or(EDIT_FLOOR_BLEND_FRAMES);
+        // Smootherstep: no step of velocity or acceleration where the correction starts.
         let u = (d as f32 / EDIT_FLOOR_BLEND_FRAMES as f32).min(1.0);
-        let w = u * u * (3.0 - 2.0 * u);
+        let w = u * u * u * (u * (6.0 * u - 15.0) + 10.0);
         m.trans[f * 3 + 1] += w * (tracked.trans[f * 3 + 1] - m.trans[f * 3 + 1]);
     }
     Ok(())
