@@ -260,12 +260,7 @@ impl DanceSystem for Duet {
             input.device,
             input.hook,
         )
-        .map_err(|e| match e {
-            FollowerError::Cancelled(_) => GenerateError::Cancelled,
-            FollowerError::Invalid(why) => {
-                GenerateError::Generation(format!("generating the follower: {why}"))
-            }
-        })?;
+        .map_err(follower_error)?;
         let mut follower = out.follower;
         let mut notes = Vec::new();
         if out.rotations_bridged > 0 {
@@ -315,16 +310,7 @@ impl DanceSystem for Duet {
             ),
         });
         Ok(Dance {
-            dancers: vec![
-                Dancer {
-                    role: Role::Leader,
-                    motion: leader.clone(),
-                },
-                Dancer {
-                    role: Role::Follower,
-                    motion: follower,
-                },
-            ],
+            dancers: couple(leader, follower),
             span,
             summary: format!(
                 "follower of {} ({t} frames, {:.1} s at {FPS} fps), seed {}, {long_form:?} \
@@ -349,6 +335,30 @@ impl DanceSystem for Duet {
 /// on a leash of `leash_frames`: the follower's place comes from the model, beside the leader,
 /// and an unleashed lock would carry it away by every glide it removes. No leg IK: pinning each
 /// contact run's feet raised MPJPE by 40 mm on training and held-out couples alike
+/// The dance's two dancers: the given leader, then the generated follower.
+fn couple(leader: &SmplMotion, follower: SmplMotion) -> Vec<Dancer> {
+    vec![
+        Dancer {
+            role: Role::Leader,
+            motion: leader.clone(),
+        },
+        Dancer {
+            role: Role::Follower,
+            motion: follower,
+        },
+    ]
+}
+
+/// Why the follower could not be made, as the generator reports it.
+fn follower_error(e: FollowerError) -> GenerateError {
+    match e {
+        FollowerError::Cancelled(_) => GenerateError::Cancelled,
+        FollowerError::Invalid(why) => {
+            GenerateError::Generation(format!("generating the follower: {why}"))
+        }
+    }
+}
+
 /// An edit of the follower (`--edit FOLLOWER --regenerate A-B`, `--continue-from`): the
 /// latent tokens of the kept frames are hard cues to the sampler
 /// ([`dancegen_reactdance::pipeline::generate_follower_known`]), the new frames are joined to
@@ -394,12 +404,7 @@ fn edit_follower(
         input.device,
         input.hook,
     )
-    .map_err(|e| match e {
-        FollowerError::Cancelled(_) => GenerateError::Cancelled,
-        FollowerError::Invalid(why) => {
-            GenerateError::Generation(format!("generating the follower: {why}"))
-        }
-    })?;
+    .map_err(follower_error)?;
     let generated = Edge151::encode(&out.follower)
         .map_err(|e| GenerateError::Generation(format!("encoding the follower: {e}")))?;
     let (values, mask) = known.edge151()?;
@@ -410,16 +415,7 @@ fn edit_follower(
     let new = known.frames_to_make();
     let fps = f64::from(FPS);
     Ok(Dance {
-        dancers: vec![
-            Dancer {
-                role: Role::Leader,
-                motion: leader.clone(),
-            },
-            Dancer {
-                role: Role::Follower,
-                motion: follower,
-            },
-        ],
+        dancers: couple(leader, follower),
         span,
         summary: format!(
             "follower of {} ({t} frames, {:.1} s at {FPS} fps), {new} of them new ({:.1} s), \
