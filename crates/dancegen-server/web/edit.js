@@ -1,7 +1,8 @@
 /**
  * Editing a finished dance in the page (issue 44), beside the viewer: choose a part of the
- * dance on the timeline, make it new as a new version of the job, and list, open and compare
- * the versions of the dance.
+ * dance on the timeline (drag along the strip under it, mark the playhead, or type the
+ * seconds), make it new as a new version of the job, and list, open and compare the versions
+ * of the dance.
  *
  * Server API used (relative to the page):
  *   GET  api/systems              → which systems edit (`edit: {regenerate, keep}` per system)
@@ -55,6 +56,7 @@ export class EditPanel {
     this.from = $('edit-from');
     this.to = $('edit-to');
     this.band = $('selection');
+    this.track = $('range-track');
     this.ready = this.setup();
   }
 
@@ -98,6 +100,30 @@ export class EditPanel {
     const select = $('edit-variation');
     select.replaceChildren(...variations.map((v, i) => new Option(`Variation ${i + 1} · seed ${v.seed}`, String(i))));
     $('edit-variation-field').hidden = variations.length < 2;
+    // Dragging along the strip under the timeline chooses the part.
+    this.track.hidden = false;
+    let anchor = null;
+    const timeAt = (e) => {
+      const r = this.track.getBoundingClientRect();
+      const u = Math.min(Math.max((e.clientX - r.left) / Math.max(r.width, 1), 0), 1);
+      return tenth(u * duration);
+    };
+    const choose = (a, b) => {
+      this.from.value = String(Math.min(a, b));
+      this.to.value = String(Math.max(a, b));
+      this.showSelection();
+    };
+    on(this.track, 'pointerdown', (e) => {
+      this.track.setPointerCapture(e.pointerId);
+      anchor = timeAt(e);
+      choose(anchor, anchor);
+    });
+    on(this.track, 'pointermove', (e) => { if (anchor !== null) choose(anchor, timeAt(e)); });
+    on(this.track, 'pointerup', (e) => {
+      if (anchor !== null) choose(anchor, timeAt(e));
+      anchor = null;
+    });
+    on(this.track, 'pointercancel', () => { anchor = null; });
     on($('mark-from'), 'click', () => this.mark(this.from));
     on($('mark-to'), 'click', () => this.mark(this.to));
     on($('regenerate'), 'click', () => this.regenerate());
@@ -213,6 +239,7 @@ export class EditPanel {
     this.abort.abort();
     this.box.hidden = true;
     this.band.hidden = true;
+    this.track.hidden = true;
     $('versions-box').hidden = true;
     $('version-list').replaceChildren();
   }

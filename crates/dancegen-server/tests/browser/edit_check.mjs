@@ -5,14 +5,16 @@
  *
  *   node edit_check.mjs <base_url> <job_id> <out_dir>
  *
- * Opens <base_url>/?job=<job_id>, marks 2 s and 4 s of the dance on the timeline (seeking the
- * song there and pressing "Mark start here" / "Mark end here"), keeps the arms, presses
+ * Opens <base_url>/?job=<job_id>, marks 1 s of the dance with "Mark start here" (seeking the
+ * song there), then drags along the strip under the timeline from 20 % to 40 % of it (2-4 s
+ * of a 10 s dance), keeps the arms, presses
  * "Regenerate this part", follows the page to the new version until its viewer is ready,
  * reads the versions list, then opens "Compare side by side" with the first version and reads
  * the two dances' titles and download links. Screenshots: <out_dir>/selection.png,
  * edited.png, compare.png. Prints ONE JSON line:
  *
- *   {"edited": new job id, "selection": {"hidden", "left", "width"}, "continueShown",
+ *   {"edited": new job id, "marked": the from field after the mark, "dragged": [from, to] after
+ *    the drag, "selection": {"hidden", "left", "width"}, "continueShown",
  *    "versions": [text of each item], "compare": {"url", "titles", "downloads": [count each],
  *    "figures"}, "requests": [...], "errors": [...]}
  *
@@ -78,11 +80,20 @@ try {
       await page.goto(`${base}/?job=${encodeURIComponent(jobId)}`, { waitUntil: 'domcontentloaded' });
       await ready(STEP_TIMEOUT_MS);
     });
-    await step('mark 2-4 s', STEP_TIMEOUT_MS, async () => {
-      await page.evaluate(() => window.__viewer.seek(2));
+    await step('mark, then drag 2-4 s', STEP_TIMEOUT_MS, async () => {
+      await page.evaluate(() => window.__viewer.seek(1));
       await page.click('#mark-from');
-      await page.evaluate(() => window.__viewer.seek(4));
-      await page.click('#mark-to');
+      result.marked = await page.$eval('#edit-from', (i) => i.value);
+      const r = await page.$eval('#range-track', (t) => {
+        const b = t.getBoundingClientRect();
+        return { x: b.left, y: b.top + b.height / 2, w: b.width };
+      });
+      await page.mouse.move(r.x + 0.2 * r.w, r.y);
+      await page.mouse.down();
+      await page.mouse.move(r.x + 0.3 * r.w, r.y, { steps: 4 });
+      await page.mouse.move(r.x + 0.4 * r.w, r.y, { steps: 4 });
+      await page.mouse.up();
+      result.dragged = await page.evaluate(() => [document.getElementById('edit-from').value, document.getElementById('edit-to').value]);
       await page.select('#edit-keep', 'arms');
       result.selection = await page.$eval('#selection', (b) => ({ hidden: b.hidden, left: b.style.left, width: b.style.width }));
       result.continueShown = await page.$eval('#continue-fields', (b) => !b.hidden);

@@ -237,7 +237,19 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
     println!("edit flow: {report}\nscreenshots in {}", shots.display());
     check_requests(&report, &s.server.url(), "edit");
 
-    // The marked part is shown on the timeline: 2-4 s of a 10 s dance.
+    // The playhead marks, and a drag along the strip chooses, 2-4 s of the 10 s dance, shown
+    // as a band.
+    assert_eq!(report["marked"], "1", "{report}");
+    let dragged: Vec<f64> = report["dragged"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|v| v.as_str()?.parse().ok())
+        .collect();
+    assert!(
+        dragged.len() == 2 && (dragged[0] - 2.0).abs() <= 0.2 && (dragged[1] - 4.0).abs() <= 0.2,
+        "dragged {dragged:?}"
+    );
     let sel = &report["selection"];
     assert_eq!(sel["hidden"], false, "{sel}");
     let pct = |v: &Value| {
