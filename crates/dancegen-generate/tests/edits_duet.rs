@@ -2,34 +2,18 @@
 //! continued from a motion, with the shipped ReactDance model, a real salsa leader and a
 //! held-out song; held to the bounds where the model can reach them.
 
-use std::path::{Path, PathBuf};
+mod edit_common;
+
 use std::sync::OnceLock;
 
+use edit_common::{REAL_POSE_SPREAD_M, generator, joints, shared};
+
 use dancegen_generate::edit::{Edit, GivenMotion};
-use dancegen_generate::models::{Origin, SearchDir};
 use dancegen_generate::request::CommonOptions;
 use dancegen_generate::systems::duet::DuetOptions;
-use dancegen_generate::{CancelToken, Generator, ModelLocator, Request, Song, SystemRequest};
+use dancegen_generate::{CancelToken, Request, Song, SystemRequest};
 use dancegen_metrics::edit::edit_quality;
 use dancegen_motion::repr::SmplMotion;
-
-/// Real dancers' pose spread (`tests/edits.rs`): a new part should differ from the old one by
-/// half of it.
-const REAL_POSE_SPREAD_M: f64 = 0.158;
-
-fn shared() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
-}
-
-fn generator() -> &'static Generator {
-    static G: OnceLock<Generator> = OnceLock::new();
-    G.get_or_init(|| {
-        Generator::new(ModelLocator::new(vec![SearchDir {
-            dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models"),
-            origin: Origin::Explicit,
-        }]))
-    })
-}
 
 /// The CMU salsa leader of couple 13 at its true 60 fps, its first 24 s.
 fn leader() -> &'static GivenMotion {
@@ -72,14 +56,6 @@ fn duet(seed: u64, edit: Edit) -> SmplMotion {
 fn base() -> &'static SmplMotion {
     static B: OnceLock<SmplMotion> = OnceLock::new();
     B.get_or_init(|| duet(0, Edit::default()))
-}
-
-fn joints(m: &SmplMotion) -> Vec<f64> {
-    m.joints_world()
-        .unwrap()
-        .into_iter()
-        .map(f64::from)
-        .collect()
 }
 
 /// Mean distance of the pelvis-relative joints of two motions over `frames`.
