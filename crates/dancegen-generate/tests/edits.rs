@@ -470,5 +470,8 @@ fn an_extended_dance_keeps_the_old_one_and_joins_the_new_part_smoothly() {
         .unwrap()
         .expect("a join inside the dance");
     eprintln!("extend: boundary jerk ratio {ratio:.2} at the join");
-    assert!(ratio < JOIN_JERK_RATIO_MAX, "boundary jerk ratio {ratio:.2}");
+    assert!(
+        ratio < JOIN_JERK_RATIO_MAX,
+        "boundary jerk ratio {ratio:.2}"
+    );
 }

@@ -62,7 +62,9 @@ impl KeyframePose {
     }
 
     fn from_file(spec: &str, path: &Path, frame: usize, t: f64) -> Result<Self, GenerateError> {
-        let mut m = GivenMotion::load_frames(path, "a --keyframe pose")?.motion;
+        let mut m = GivenMotion::load_frames(path, "a --keyframe pose")
+            .map_err(|e| GenerateError::Invalid(format!("--keyframe {spec}: {e}")))?
+            .motion;
         // Heights over the file's own floor (where its planted feet are; the lowest foot of a
         // one-frame file), so that a pose from another capture stands on the dance's floor.
         m.put_feet_on_floor().map_err(|e| {
