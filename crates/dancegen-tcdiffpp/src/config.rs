@@ -9,6 +9,8 @@
 use dancegen_nn::diffusion::Spacing;
 use serde::{Deserialize, Serialize};
 
+use crate::prediction::Prediction;
+
 /// Which mixer follows the self-attention in each Sequence Decoder layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -61,6 +63,9 @@ pub struct DenoiserConfig {
     /// the noise the decoder reads cannot make the root jump between frames
     /// (docs/group-collapse.md §11).
     pub root_integrated: bool,
+    /// What the last layer predicts: x̂0 (the paper's) or `v` (our option, the
+    /// v-parameterisation with its skip from x_t; [`crate::prediction`]).
+    pub prediction: Prediction,
 }
 
 impl Default for DenoiserConfig {
@@ -82,6 +87,7 @@ impl Default for DenoiserConfig {
             footwork_hidden: 128,
             footwork_residual: false,
             root_integrated: false,
+            prediction: Prediction::X0,
         }
     }
 }
@@ -107,6 +113,13 @@ pub struct LossWeights {
     /// each dancer's frame-to-frame root x/y change in x̂0 against x0's, on the normalised
     /// channels. It is what keeps a predicted root from jumping between frames (issue 43).
     pub root_velocity: f64,
+    /// Our option, 0 (off, the paper's uniform L_simple) by default: each window's L_simple
+    /// weighted by `min(1 + SNR_t, cap)`. `1 + SNR` is the weight that turns the x0 error into
+    /// the v error (Salimans & Ho 2022), so with [`Prediction::Velocity`] the low-noise steps,
+    /// where the network must remove the last noise from its skip, are trained as a
+    /// v-predictor's are; the cap (Hang et al. 2023, "Min-SNR") keeps them from drowning
+    /// the rest.
+    pub simple_snr_cap: f64,
 }
 
 impl Default for LossWeights {
@@ -118,6 +131,7 @@ impl Default for LossWeights {
             contact: 10.942,
             distance: 0.636,
             root_velocity: 0.0,
+            simple_snr_cap: 0.0,
         }
     }
 }

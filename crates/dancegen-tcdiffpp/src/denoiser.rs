@@ -43,6 +43,7 @@ use crate::cross_mamba::CrossMambaLayer;
 use crate::footwork::FootworkAdaptor;
 use crate::fusion::FusionProjection;
 use crate::layout::{N_MAX, from_tokens, to_tokens, token_mask, token_padding};
+use crate::prediction::{Prediction, VelocitySkip};
 use crate::root_path::RootPath;
 use crate::swap::SwapEmbedding;
 use dancegen_nn::host_linear;
@@ -104,6 +105,9 @@ pub struct GroupDenoiser {
     /// `h + FP(h)` instead of `FP(h)` ([`DenoiserConfig::fusion_residual`]).
     #[module(skip)]
     pub fusion_residual: bool,
+    /// The skip from x_t of [`crate::prediction::Prediction::Velocity`]; `None` predicts x̂0.
+    #[module(skip)]
+    pub velocity: Option<VelocitySkip>,
 }
 
 impl DenoiserConfig {
@@ -151,6 +155,8 @@ impl DenoiserConfig {
             d_model: d,
             positioning: self.positioning,
             fusion_residual: self.fusion_residual,
+            velocity: (self.prediction == Prediction::Velocity)
+                .then(|| VelocitySkip::new(self.root_integrated)),
         }
     }
 }
@@ -243,7 +249,8 @@ impl GroupDenoiser {
         let device = x_t.device();
         let mask = token_mask(&c.dancers, frames, &device);
         let control = c.control.clone().reshape([b, frames * N_MAX, 1]);
-        let h = host_linear::forward(&self.input, Tensor::cat(vec![to_tokens(x_t), control], 2));
+        let x_tokens = to_tokens(x_t);
+        let h = host_linear::forward(&self.input, Tensor::cat(vec![x_tokens.clone(), control], 2));
         let mut h = (h + self.positions(frames, &device)) * mask.clone();
         if let Some(f) = &self.fusion {
             let fused = f.forward(h.clone(), mask.clone());
@@ -283,6 +290,10 @@ impl GroupDenoiser {
         let out = match &self.footwork {
             Some(fa) => fa.forward(raw),
             None => raw,
+        };
+        let out = match &self.velocity {
+            Some(v) => v.apply(out, x_tokens, t),
+            None => out,
         };
         from_tokens(out * mask)
     }

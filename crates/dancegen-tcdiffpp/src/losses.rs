@@ -82,6 +82,17 @@ pub fn root_velocity(pred: Tensor<3>, x0: Tensor<3>, active: usize) -> Tensor<1>
         / (active * ROOT_HORIZONTAL.len() * (t - 1)) as f64
 }
 
+/// `min(1 + SNR_t, cap)` per window ([`LossWeights::simple_snr_cap`]), `SNR = ᾱ / (1 − ᾱ)`.
+pub fn snr_weights(schedule: &Schedule, steps: &[usize], cap: f64) -> Vec<f32> {
+    steps
+        .iter()
+        .map(|&t| {
+            let a = schedule.alphas_cumprod[t];
+            (1.0 / (1.0 - a).max(f64::MIN_POSITIVE)).min(cap) as f32
+        })
+        .collect()
+}
+
 /// Which (frame, slot) roots a training window gets clean: `[B·T·N_MAX]` flags.
 fn draw_control(dancers: &[usize], t: usize, drop: f64, rng: &mut SeededNoise) -> Vec<f32> {
     let mut c = vec![0f32; dancers.len() * t * N_MAX];
@@ -167,7 +178,14 @@ pub fn group_loss(
     // Normalisers of the masked means: active values per frame.
     let active: usize = batch.dancers.iter().sum();
     let per_frame = (active * DIMS) as f64;
-    let simple = (pred.clone() - x0.clone()).powf_scalar(2.0).sum() / (per_frame * t as f64);
+    let sq = (pred.clone() - x0.clone()).powf_scalar(2.0);
+    let simple = if weights.simple_snr_cap > 0.0 {
+        let w = snr_weights(schedule, &steps, weights.simple_snr_cap);
+        let w = Tensor::<3>::from_data(TensorData::new(w, [b, 1, 1]), &device);
+        (sq.sum_dim(2).sum_dim(1) * w).sum() / (per_frame * t as f64)
+    } else {
+        sq.sum() / (per_frame * t as f64)
+    };
     let vel = |x: Tensor<3>| x.clone().narrow(1, 1, t - 1) - x.narrow(1, 0, t - 1);
     let velocity =
         (vel(pred.clone()) - vel(x0.clone())).powf_scalar(2.0).sum() / (per_frame * (t - 1) as f64);
@@ -268,4 +286,19 @@ pub fn distance_consistency(pred: Tensor<3>, gt: Tensor<3>, dancers: &[usize]) -
         }
     }
     total.unwrap_or_else(|| Tensor::zeros([1], &device))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snr_weights_are_one_at_pure_noise_and_capped_near_the_data() {
+        let s = Schedule::edge();
+        let w = snr_weights(&s, &[999, 500, 0], 6.0);
+        assert!((w[0] - 1.0).abs() < 1e-3, "{w:?}");
+        // Half way through the cosine schedule ᾱ ≈ 0.5: 1 + SNR ≈ 2.
+        assert!(w[1] > 1.5 && w[1] < 2.5, "{w:?}");
+        assert_eq!(w[2], 6.0);
+    }
 }
