@@ -5,7 +5,9 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, KeyframePose, parse_joint_set};
+use dancegen_generate::edit::{
+    Edit, GivenMotion, KeepJoints, KeyframePose, dance_file, parse_joint_set,
+};
 use dancegen_generate::formation_file::FormationFile;
 use dancegen_generate::record::DanceRecord;
 use dancegen_generate::request::{Character, CommonOptions, DancerSelection, OutputRequest};
@@ -60,6 +62,23 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         .map(|p| p.display().to_string())
         .unwrap_or_default();
     let recorded = edited.as_ref().and_then(|e| e.record.as_ref());
+    let continue_from = match &args.continue_from {
+        Some(p) => Some(GivenMotion::load_dance(
+            p,
+            "the motion to continue",
+            None,
+            "convert it first: dancegen convert FILE --source-fps N -o motion.npz",
+        )?),
+        None => None,
+    };
+    // A group given to edit or to continue makes a group dance of as many dancers.
+    let given_group = edited
+        .as_ref()
+        .map(|e| &e.dance)
+        .into_iter()
+        .chain(continue_from.as_ref())
+        .map(GivenMotion::dancers)
+        .find(|&n| n > 1);
     let system = match (args.system.as_deref(), &args.leader, recorded) {
         (Some(s), _, Some(r)) if s != r.system => bail!(
             "--edit {}: a {} dance; it is edited with --system {} (or without --system)",
@@ -68,6 +87,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
             r.system
         ),
         (None, None, Some(r)) => r.system.as_str(),
+        (None, None, None) if given_group.is_some() => "group",
         (None, None, None) => "solo",
         (None, Some(_), _) => "duet",
         (Some(s), _, _) => s,
@@ -85,7 +105,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
         ),
         ("duet", None) => bail!("the duet system dances with a leader: give --leader FILE"),
         ("group", Some(_)) => bail!("--leader makes a duet; the group system takes no leader"),
-        ("group", None) => SystemRequest::Group(group_options(args)?),
+        ("group", None) => SystemRequest::Group(group_options(args, given_group)?),
         ("holistic", Some(_)) => {
             bail!("--leader makes a duet; the holistic system dances alone")
         }
@@ -159,15 +179,6 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
             .map(|r| PathBuf::from(&r.model))
             .filter(|d| d.join("model.toml").is_file())
     });
-    let continue_from = match &args.continue_from {
-        Some(p) => Some(GivenMotion::load(
-            p,
-            "the motion to continue",
-            None,
-            "convert it first: dancegen convert FILE --source-fps N -o motion.npz",
-        )?),
-        None => None,
-    };
     let keep_joints = match (&args.keep_joints, &args.from) {
         (Some(spec), Some(from)) => {
             let (joints, root) =
@@ -176,7 +187,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                 spec: spec.clone(),
                 joints,
                 root,
-                from: GivenMotion::load(
+                from: GivenMotion::load_dance(
                     from,
                     "the motion to keep joints from",
                     args.from_fps,
@@ -266,8 +277,10 @@ fn solo_options(args: &GenerateArgs) -> Result<SoloOptions> {
     })
 }
 
-fn group_options(args: &GenerateArgs) -> Result<GroupOptions> {
-    let Some(n) = args.dancers else {
+/// The group options; `given` is the dancer count of a group given to edit or continue,
+/// which `--dancers` defaults to.
+fn group_options(args: &GenerateArgs, given: Option<usize>) -> Result<GroupOptions> {
+    let Some(n) = args.dancers.or(given) else {
         bail!("--system group needs --dancers N (2 to 5)");
     };
     let sampler = match args.sampler {
@@ -299,6 +312,7 @@ fn edited_dance(args: &GenerateArgs) -> Result<Option<EditedDance>> {
     let Some(path) = &args.edit else {
         return Ok(None);
     };
+    let path = &dance_file(path);
     let record = DanceRecord::read(path)?;
     // A duet's .npz holds its follower (dancer 1), which is what a duet edit makes anew; its
     // leader comes with --leader.
@@ -306,6 +320,7 @@ fn edited_dance(args: &GenerateArgs) -> Result<Option<EditedDance>> {
     if let Some(r) = &record
         && r.dancers > 1
         && !duet_follower(r)
+        && r.system != "group"
     {
         bail!(
             "--edit {}: dancer {} of a {}-dancer {} dance; editing one dancer of several is not \
@@ -316,7 +331,7 @@ fn edited_dance(args: &GenerateArgs) -> Result<Option<EditedDance>> {
             r.system
         );
     }
-    let dance = GivenMotion::load(
+    let dance = GivenMotion::load_dance(
         path,
         "the dance to edit",
         None,

@@ -99,10 +99,7 @@ fn regenerated() -> &'static (SmplMotion, Vec<std::ops::Range<usize>>) {
         let (original, _) = base();
         let ranges = [[8.0, 14.0], [20.0, 21.5]];
         let edit = Edit {
-            base: Some(GivenMotion {
-                label: "base".into(),
-                motion: original.clone(),
-            }),
+            base: Some(GivenMotion::one("base".into(), original.clone())),
             regenerate: ranges.to_vec(),
             ..Edit::default()
         };
@@ -178,10 +175,7 @@ fn a_regenerated_range_is_new_on_the_beat_and_joins_the_kept_frames() {
 fn a_continued_dance_starts_with_the_motions_last_second_and_joins_it() {
     let (original, _) = base();
     let edit = Edit {
-        continue_from: Some(GivenMotion {
-            label: "base".into(),
-            motion: original.clone(),
-        }),
+        continue_from: Some(GivenMotion::one("base".into(), original.clone())),
         ..Edit::default()
     };
     // The dance continues on the song from where the base ended (89 s), one second early.
@@ -204,10 +198,7 @@ fn a_continued_dance_starts_with_the_motions_last_second_and_joins_it() {
 #[test]
 fn unsupported_and_bad_edits_are_refused_before_any_work() {
     let (original, _) = base();
-    let given = GivenMotion {
-        label: "base.npz".into(),
-        motion: original.clone(),
-    };
+    let given = GivenMotion::one("base.npz".into(), original.clone());
     let mut group = solo(
         0,
         60.0,
@@ -253,10 +244,7 @@ fn kept_legs_and_root_stay_and_the_upper_body_is_new() {
             spec: "lower".into(),
             joints: joints_mask,
             root,
-            from: GivenMotion {
-                label: "base".into(),
-                motion: original.clone(),
-            },
+            from: GivenMotion::one("base".into(), original.clone()),
         }),
         ..Edit::default()
     };
@@ -453,10 +441,7 @@ fn a_path_is_followed_and_the_dance_on_it_stays_whole() {
 fn an_extended_dance_keeps_the_old_one_and_joins_the_new_part_smoothly() {
     let (original, _) = base();
     let edit = Edit {
-        base: Some(GivenMotion {
-            label: "base".into(),
-            motion: original.clone(),
-        }),
+        base: Some(GivenMotion::one("base".into(), original.clone())),
         extend: true,
         ..Edit::default()
     };

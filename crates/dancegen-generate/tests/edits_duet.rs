@@ -78,10 +78,7 @@ fn pose_difference(a: &[f64], b: &[f64], frames: std::ops::Range<usize>) -> f64 
 fn a_regenerated_range_of_the_follower_is_new_and_joins_the_kept_frames() {
     let original = base();
     let edit = Edit {
-        base: Some(GivenMotion {
-            label: "follower".into(),
-            motion: original.clone(),
-        }),
+        base: Some(GivenMotion::one("follower".into(), original.clone())),
         regenerate: vec![[8.0, 14.0]],
         ..Edit::default()
     };
@@ -139,10 +136,7 @@ fn a_follower_continued_from_a_motion_starts_with_its_last_second() {
     )
     .unwrap();
     let edit = Edit {
-        continue_from: Some(GivenMotion {
-            label: "motion".into(),
-            motion: from.clone(),
-        }),
+        continue_from: Some(GivenMotion::one("motion".into(), from.clone())),
         ..Edit::default()
     };
     let made = duet(4, edit);

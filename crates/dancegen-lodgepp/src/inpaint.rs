@@ -260,7 +260,12 @@ impl SoloModel {
         }
         let largest = join_runs(&mut buf, known, &runs);
         if opts.foot_lock {
-            lock_feet_in_runs(&mut buf, known, &runs, opts);
+            let lock = FootLock {
+                root: true,
+                ik: opts.foot_ik,
+                rule: opts.foot_lock_rule,
+            };
+            lock_feet_in_runs(&mut buf, known, &runs, lock);
         }
         for r in &runs {
             hand_over_root(&mut buf, known, r.a, r.b);
@@ -273,6 +278,16 @@ impl SoloModel {
     }
 }
 
+/// The planted-feet pass over a made run and the frames around it
+/// ([`crate::planted_feet`]): the root lock (`root`; not for a dancer whose root path is
+/// given) and the leg IK (`ik`).
+#[derive(Clone, Copy, Debug)]
+pub struct FootLock {
+    pub root: bool,
+    pub ik: bool,
+    pub rule: crate::planted_feet::PlantedRule,
+}
+
 /// Known frames on each side of a made run that [`join_made_runs`] blends it into.
 pub const JOIN_CONTEXT: usize = 8;
 
@@ -281,10 +296,14 @@ pub const JOIN_CONTEXT: usize = 8;
 /// keeps, with the treatment the windows of [`SoloModel::inpaint_hooked`] get: each made run
 /// is blended into the kept frames around it (root onto the kept path at its start,
 /// rotations and height with their velocity, [`SeamBlend::Hermite`]), its root path ramped
-/// to meet the kept one at its end, the root velocity handed over at both ends, and partly
-/// known frames eased into. Returns the frames (known values exact) and the largest root
-/// move that joined a run.
-pub fn join_made_runs(generated: &[f32], known: &KnownFrames) -> (Vec<f32>, f32) {
+/// to meet the kept one at its end, the planted feet of the run locked (`lock`, as the
+/// windows' are), the root velocity handed over at both ends, and partly known frames eased
+/// into. Returns the frames (known values exact) and the largest root move that joined a run.
+pub fn join_made_runs(
+    generated: &[f32],
+    known: &KnownFrames,
+    lock: Option<FootLock>,
+) -> (Vec<f32>, f32) {
     let total = known.frames();
     assert_eq!(
         generated.len(),
@@ -352,6 +371,9 @@ pub fn join_made_runs(generated: &[f32], known: &KnownFrames) -> (Vec<f32>, f32)
         runs.push(Run { a, b, misses });
     }
     let largest = join_runs(&mut buf, known, &runs);
+    if let Some(lock) = lock {
+        lock_feet_in_runs(&mut buf, known, &runs, lock);
+    }
     for r in &runs {
         hand_over_root(&mut buf, known, r.a, r.b);
     }
@@ -449,14 +471,16 @@ pub const FOOT_LOCK_CONTEXT: usize = 30;
 /// ones there. Only the run's frames are written back. Known root positions stay: the root
 /// path the lock moved is joined to them again as in [`join_runs`] before the legs are
 /// pinned on it.
-fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], opts: &GenerateOptions) {
+fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], lock: FootLock) {
     let total = buf.len() / DIMS;
     for r in runs {
         let (a, b) = (r.a, r.b);
         let lo = a.saturating_sub(FOOT_LOCK_CONTEXT);
         let hi = (b + FOOT_LOCK_CONTEXT).min(total);
         let mut seg = buf[lo * DIMS..hi * DIMS].to_vec();
-        crate::planted_feet::lock_planted_feet_with(&mut seg, opts.foot_lock_rule);
+        if lock.root {
+            crate::planted_feet::lock_planted_feet_with(&mut seg, lock.rule);
+        }
         let moved = |seg: &[f32], g: usize| {
             ROOT_HORIZONTAL.map(|c| seg[(g - lo) * DIMS + c] - buf[g * DIMS + c])
         };
@@ -476,9 +500,9 @@ fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], opts: &
         buf[a * DIMS..b * DIMS].copy_from_slice(&seg[(a - lo) * DIMS..(b - lo) * DIMS]);
         join_runs(buf, known, &[Run { a, b, misses }]);
         // The legs are pinned on the root path as it now is, known parts included.
-        if opts.foot_ik {
+        if lock.ik {
             let mut seg = buf[lo * DIMS..hi * DIMS].to_vec();
-            crate::planted_feet::pin_planted_feet_with(&mut seg, opts.foot_lock_rule);
+            crate::planted_feet::pin_planted_feet_with(&mut seg, lock.rule);
             buf[a * DIMS..b * DIMS].copy_from_slice(&seg[(a - lo) * DIMS..(b - lo) * DIMS]);
         }
         // The lock moved known channels of the run too (a keyframe's legs): back to their
@@ -746,7 +770,7 @@ mod tests {
             values: known,
             mask,
         };
-        let (out, largest) = join_made_runs(&generated, &known);
+        let (out, largest) = join_made_runs(&generated, &known, None);
         let x: Vec<f32> = (0..t).map(|f| out[f * DIMS + ROOT_HORIZONTAL[0]]).collect();
         for f in (0..20).chain(60..80) {
             assert_eq!(

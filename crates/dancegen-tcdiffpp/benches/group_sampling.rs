@@ -86,6 +86,7 @@ impl Bench {
             frames: FRAMES,
             dancers: DANCERS,
             control: None,
+            known: None,
         };
         let out = generate(
             &self.net,

@@ -38,6 +38,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 
 use crate::config::{LongSampler, PrefixMode};
 use crate::denoiser::{GroupCond, GroupDenoiser, MUSIC_DIMS, PreparedGroupDenoiser};
+use crate::known::GroupKnown;
 use crate::layout::{GROUP_DIMS, N_MAX, centroid, channel, shift_roots};
 use crate::swap::{identity_code, swap_code};
 
@@ -52,6 +53,9 @@ pub struct GroupRequest<'a> {
     pub dancers: usize,
     /// Requested root paths, `control[f · N_MAX + s]`.
     pub control: Option<&'a [Option<RootXy>]>,
+    /// What an edit keeps ([`crate::known`]); sampled window by window (LGDS) whatever
+    /// [`GroupSampleOptions::sampler`] says.
+    pub known: Option<GroupKnown<'a>>,
 }
 
 /// Sampling choices.
@@ -104,7 +108,12 @@ pub fn generate(
 ) -> Result<Vec<f32>, Cancelled> {
     assert!((2..=N_MAX).contains(&req.dancers), "2..={N_MAX} dancers");
     assert!(window.is_multiple_of(2) && window >= 2, "even window");
-    let mut out = match opts.sampler {
+    let sampler = if req.known.is_some() {
+        LongSampler::Lgds
+    } else {
+        opts.sampler
+    };
+    let mut out = match sampler {
         LongSampler::Lgds => lgds(net, schedule, window, req, opts, device, hook)?,
         LongSampler::Parallel => parallel(net, schedule, window, req, opts, device, hook)?,
     };
@@ -277,8 +286,25 @@ fn lgds(
     let identity: Vec<usize> = (0..n).collect();
     for w in 0..windows {
         let start = w * half;
+        let made = if w == 0 { 0 } else { half };
+        if let Some(k) = &req.known
+            && (start + made..start + window).all(|g| g >= req.frames || k.frame_known(g, n))
+        {
+            // Nothing to make: the known frames, normalised, as a sampled window would give.
+            for g in start + made..start + window {
+                out.extend(k.normalised(g.min(req.frames - 1), n, &scale, &shift));
+            }
+            continue;
+        }
         let (perm, origin, prefix) = if w == 0 {
-            (identity.clone(), first_origin(req, &scale), None)
+            match req.known.filter(|k| (0..n).all(|d| k.root_known(0, d))) {
+                // Known first positions: slots and origin from them, as in training.
+                Some(k) => {
+                    let first = k.normalised(0, n, &scale, &shift);
+                    (sorted_slots(&first, n), centroid(&first, n), None)
+                }
+                None => (identity.clone(), first_origin(req, &scale), None),
+            }
         } else {
             let placed = out.len() / GROUP_DIMS;
             let tail = &out[(placed - half) * GROUP_DIMS..];
@@ -288,7 +314,15 @@ fn lgds(
             shift_roots(&mut p, n, [-origin[0], -origin[1]]);
             (perm, origin, Some(p))
         };
-        let ctrl = window_control(req, start, window, &perm, origin, &scale);
+        let mut ctrl = window_control(req, start, window, &perm, origin, &scale);
+        let known_cue = req
+            .known
+            .map(|k| k.window_cue(start, window, made, &perm, origin, &scale, &shift));
+        if let Some(k) = &known_cue {
+            for (f, kf) in ctrl.flags.iter_mut().zip(&k.flags) {
+                *f = f.max(*kf);
+            }
+        }
         let music = music_window(req.music, req.frames, start, window);
         let cond = GroupCond {
             music: to_tensor(music, [1, window, MUSIC_DIMS], device),
@@ -327,10 +361,19 @@ fn lgds(
                 activity: CueActivity::Hard,
             });
         }
+        let known_mask = known_cue.as_ref().map(|k| k.mask.clone());
+        if let Some(k) = known_cue.filter(|k| k.mask.iter().any(|&m| m > 0.0)) {
+            cues.push(Cue {
+                value: to_tensor(k.values, shape, device),
+                mask: to_tensor(k.mask, shape, device),
+                noised: opts.prefix == PrefixMode::Renoised,
+                activity: CueActivity::Hard,
+            });
+        }
         if ctrl.mask.iter().any(|&m| m > 0.0) {
             cues.push(Cue {
                 value: to_tensor(ctrl.values, shape, device),
-                mask: to_tensor(ctrl.mask, shape, device),
+                mask: to_tensor(ctrl.mask.clone(), shape, device),
                 noised: false,
                 activity: CueActivity::Hard,
             });
@@ -348,13 +391,56 @@ fn lgds(
             hook,
             &|x| x,
         )?);
+        let mut x = x;
+        if prefix.is_some() {
+            let cued =
+                |i: usize| ctrl.mask[i] > 0.0 || known_mask.as_ref().is_some_and(|m| m[i] > 0.0);
+            continue_free_roots(&mut x, window, made, n, &cued);
+        }
         let mut x = permute(&x, &perm, true);
         shift_roots(&mut x, n, origin);
-        let skip = if w == 0 { 0 } else { half };
-        out.extend_from_slice(&x[skip * GROUP_DIMS..]);
+        out.extend_from_slice(&x[made * GROUP_DIMS..]);
     }
     denormalise(&mut out, &scale, &shift, n);
     Ok(out)
+}
+
+/// Continues each free dancer's root across an LGDS window's seam: its made frames
+/// `made..window` of `x` (normalised, window coordinates, `[W, N_MAX·151]`) are shifted so that
+/// the first of them follows the prefix's last with the made part's own first step (no jump,
+/// no change of velocity at the seam). A dancer with a cued root on any made frame (a
+/// formation, an edit's known root) is left as cued.
+///
+/// Why: the prefix is imposed on the window's first half, but the network places the made
+/// frames' root itself (with `root_integrated`, at the window mean of its own root output), and
+/// its placement of the prefix need not be the imposed one. Unshifted, the shipped model's
+/// dancers jumped 0.2-0.4 m at every window seam of a 20 s dance (feelings.ogg 30-50 s, 3
+/// dancers, `--sampler lgds`): the sampler a formation with free dancers uses.
+fn continue_free_roots(
+    x: &mut [f32],
+    window: usize,
+    made: usize,
+    n: usize,
+    cued: &dyn Fn(usize) -> bool,
+) {
+    if made == 0 || made + 2 > window {
+        return;
+    }
+    for s in 0..n {
+        let idx = |f: usize, ch: usize| f * GROUP_DIMS + channel(s, ch);
+        let any_cue = (made..window).any(|f| ROOT_HORIZONTAL.iter().any(|&ch| cued(idx(f, ch))));
+        if any_cue {
+            continue;
+        }
+        for &ch in &ROOT_HORIZONTAL {
+            let (last, first, next) =
+                (x[idx(made - 1, ch)], x[idx(made, ch)], x[idx(made + 1, ch)]);
+            let shift = last + (next - first) - first;
+            for f in made..window {
+                x[idx(f, ch)] += shift;
+            }
+        }
+    }
 }
 
 /// Normalised → raw, in place; slots `n..` set to zero.

@@ -406,6 +406,7 @@ fn both_long_samplers_follow_requested_paths_and_are_seeded() {
                 frames,
                 dancers: n,
                 control: Some(&paths),
+                known: None,
             };
             let out = generate(&m, &schedule, window, &req, &opts, &dev, &NoHook).unwrap();
             assert_eq!(out.len(), frames * GROUP_DIMS);
@@ -475,6 +476,7 @@ fn the_mamba_decoder_samples_long_dances() {
         frames,
         dancers: n,
         control: None,
+        known: None,
     };
     let out = generate(&m, &schedule, window, &req, &opts, &dev, &NoHook).unwrap();
     assert_eq!(out.len(), frames * GROUP_DIMS);

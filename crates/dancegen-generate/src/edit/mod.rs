@@ -15,12 +15,13 @@
 //! `--path` constrain frames nothing else keeps. Two claims on one value are an error naming
 //! both.
 
+mod dancers;
 mod given;
 mod joints;
 mod keyframe;
 mod known;
 
-pub use given::GivenMotion;
+pub use given::{GivenMotion, dance_file};
 pub use joints::{legs_mask, parse_joint_set, with_ancestors};
 pub use keyframe::{KeyframePose, parse_keyframe_spec};
 pub use known::{ALL_JOINTS, KnownParts};
@@ -30,7 +31,7 @@ use dancegen_motion::repr::motion::POSE_DIMS;
 
 use crate::error::GenerateError;
 use crate::formation_file::{ANY_SONG_SECONDS, FormationFile};
-use crate::song::{FPS, Span};
+use crate::song::{AnalysedSong, FPS, Span};
 
 /// The operations, as [`Edit::operations`] and `DanceSystem::EDITS` name them.
 pub const REGENERATE: &str = "--edit/--regenerate";
@@ -205,6 +206,26 @@ impl Edit {
         Ok(())
     }
 
+    /// The part of `song` an edit dances, from `start` (to `end` where the edit does not fix
+    /// its length): an edited dance's own length (to `end` when it is extended), a kept-joints
+    /// motion's length when no `end` is given, else `start`-`end`.
+    pub fn span(
+        &self,
+        song: &AnalysedSong,
+        start: Option<f64>,
+        end: Option<f64>,
+    ) -> Result<Span, GenerateError> {
+        match (self.base.as_ref(), self.kept_joints_frames()) {
+            (Some(_), _) if self.extend => song.span(start, end),
+            (Some(b), _) => song.span_of_frames(start, b.motion.frames()),
+            (None, Some(n)) if end.is_none() => {
+                let first = (start.unwrap_or(0.0) * f64::from(FPS)).round() as usize;
+                song.span_of_frames(start, n.min(song.frames().saturating_sub(first)))
+            }
+            _ => song.span(start, end),
+        }
+    }
+
     /// What is known of the dance on `span` of a song of `song_seconds`, `None` for a plain
     /// generation.
     pub fn known(
@@ -216,6 +237,7 @@ impl Edit {
         if self.is_empty() {
             return Ok(None);
         }
+        self.check_one_dancer()?;
         let frames = span.end_frame - span.first_frame;
         let mut k = self.kept_frames(frames)?;
         self.keep_joints_into(&mut k)?;
@@ -469,10 +491,10 @@ mod tests {
             .map(|i| (i % 7) as f32 * 0.01)
             .collect();
         let trans = (0..frames * 3).map(|i| i as f32 * 0.001).collect();
-        GivenMotion {
-            label: "base.npz".into(),
-            motion: SmplMotion::new(30.0, poses, trans).unwrap(),
-        }
+        GivenMotion::one(
+            "base.npz".into(),
+            SmplMotion::new(30.0, poses, trans).unwrap(),
+        )
     }
 
     fn span(frames: usize) -> Span {

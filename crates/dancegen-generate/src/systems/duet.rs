@@ -408,7 +408,7 @@ fn edit_follower(
     let generated = Edge151::encode(&out.follower)
         .map_err(|e| GenerateError::Generation(format!("encoding the follower: {e}")))?;
     let (values, mask) = known.edge151()?;
-    let (frames, largest) = join_made_runs(&generated, &KnownFrames { values, mask });
+    let (frames, largest) = join_made_runs(&generated, &KnownFrames { values, mask }, None);
     let mut follower =
         Edge151::decode(&frames).map_err(|e| GenerateError::Generation(e.to_string()))?;
     known.splice(&mut follower);

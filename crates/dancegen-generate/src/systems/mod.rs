@@ -3,6 +3,7 @@
 
 pub mod duet;
 pub mod group;
+mod group_edit;
 pub mod holistic;
 pub mod solo;
 

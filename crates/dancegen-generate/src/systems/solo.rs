@@ -192,17 +192,7 @@ fn edit(
 ) -> Result<Dance, GenerateError> {
     let common = input.common;
     let song = input.song;
-    let span = match (common.edit.base.as_ref(), common.edit.kept_joints_frames()) {
-        // Continued: the dance from its start to --end (the song's end by default).
-        (Some(_), _) if common.edit.extend => song.span(common.start, common.end)?,
-        (Some(b), _) => song.span_of_frames(common.start, b.motion.frames())?,
-        // Kept joints without --end: the dance lasts as long as their motion (or the song).
-        (None, Some(n)) if common.end.is_none() => {
-            let first = (common.start.unwrap_or(0.0) * f64::from(FPS)).round() as usize;
-            song.span_of_frames(common.start, n.min(song.frames().saturating_sub(first)))?
-        }
-        _ => song.span(common.start, common.end)?,
-    };
+    let span = common.edit.span(song, common.start, common.end)?;
     let frames = span.end_frame - span.first_frame;
     if span.seconds() < MIN_SONG_SECONDS {
         return Err(GenerateError::Invalid(format!(
@@ -266,32 +256,59 @@ fn edit(
 pub const EDIT_FLOOR_BLEND_FRAMES: usize = 15;
 
 /// The made frames of an edit stand on the floor as a whole generation does
-/// ([`SmplMotion::put_feet_on_tracked_floor`]), with the correction faded in (smootherstep) over
-/// [`EDIT_FLOOR_BLEND_FRAMES`] from each kept frame, whose heights must not change.
-fn floor_made_frames(m: &mut SmplMotion, made: &[bool]) -> Result<(), GenerateError> {
+/// ([`SmplMotion::put_feet_on_tracked_floor`]), with the correction faded in from each kept
+/// frame, whose heights must not change ([`fade_from_kept`]).
+pub(crate) fn floor_made_frames(m: &mut SmplMotion, made: &[bool]) -> Result<(), GenerateError> {
     let mut tracked = m.clone();
     tracked
         .put_feet_on_tracked_floor()
         .map_err(|e| GenerateError::Generation(e.to_string()))?;
-    let t = made.len();
-    let kept: Vec<usize> = (0..t).filter(|&f| !made[f]).collect();
-    for f in (0..t).filter(|&f| made[f]) {
-        let d = kept
-            .iter()
-            .map(|&k| k.abs_diff(f))
-            .min()
-            .unwrap_or(EDIT_FLOOR_BLEND_FRAMES);
-        // Smootherstep: no step of velocity or acceleration where the correction starts.
-        let u = (d as f32 / EDIT_FLOOR_BLEND_FRAMES as f32).min(1.0);
-        let w = u * u * u * (u * (6.0 * u - 15.0) + 10.0);
+    for (f, w) in fade_from_kept(made).into_iter().enumerate() {
         m.trans[f * 3 + 1] += w * (tracked.trans[f * 3 + 1] - m.trans[f * 3 + 1]);
     }
     Ok(())
 }
 
+/// How much of a correction a frame of an edit takes: 0 on kept frames (`made` false), rising
+/// over [`EDIT_FLOOR_BLEND_FRAMES`] from the nearest kept frame to 1 (smootherstep: no step
+/// of velocity or acceleration where the correction starts). 1 everywhere when nothing is
+/// kept.
+pub(crate) fn fade_from_kept(made: &[bool]) -> Vec<f32> {
+    let t = made.len();
+    // Distance to the nearest kept frame, forwards then backwards.
+    let mut d = vec![usize::MAX; t];
+    let mut last = None;
+    for f in 0..t {
+        if !made[f] {
+            last = Some(f);
+        }
+        if let Some(k) = last {
+            d[f] = f - k;
+        }
+    }
+    last = None;
+    for f in (0..t).rev() {
+        if !made[f] {
+            last = Some(f);
+        }
+        if let Some(k) = last {
+            d[f] = d[f].min(k - f);
+        }
+    }
+    d.into_iter()
+        .map(|d| {
+            let u = (d as f32 / EDIT_FLOOR_BLEND_FRAMES as f32).min(1.0);
+            u * u * u * (u * (6.0 * u - 15.0) + 10.0)
+        })
+        .collect()
+}
+
 /// Lifts each frame of `made` whose lowest foot joint is below the floor (y = 0) onto it;
 /// the others (kept frames of an edit) are not touched.
-fn lift_made_frames_above_floor(m: &mut SmplMotion, made: &[bool]) -> Result<(), String> {
+pub(crate) fn lift_made_frames_above_floor(
+    m: &mut SmplMotion,
+    made: &[bool],
+) -> Result<(), String> {
     let joints = m.joints_world().map_err(|e| e.to_string())?;
     for (f, p) in m.trans.chunks_exact_mut(3).enumerate() {
         if !made[f] {
