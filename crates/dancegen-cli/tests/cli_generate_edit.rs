@@ -555,3 +555,108 @@ fn an_extended_dance_is_the_old_one_then_more_to_the_new_end() {
     );
     assert!(!dir.path().join("x.npy").exists());
 }
+
+#[test]
+fn a_group_is_edited_through_the_files_it_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    // `-o group.npz` writes group_0.npz … group_2.npz.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--system",
+        "group",
+        "--dancers",
+        "3",
+        "--start",
+        "60",
+        "--end",
+        "72",
+        "-o",
+        &p("group.npz"),
+        "-o",
+        &p("group.npy"),
+    ]));
+    assert!(dir.path().join("group_2.npz").is_file());
+    // The name given, or any dancer's file, names the group: no --system, --dancers or song.
+    for edited in ["group.npz", "group_1.npz"] {
+        let out = format!("v2-{}", edited.replace(".npz", ".npy"));
+        ok(&dancegen(&[
+            "-q",
+            "generate",
+            "--edit",
+            &p(edited),
+            "--regenerate",
+            "4-7",
+            "--seed",
+            "3",
+            "-o",
+            &p(&out),
+        ]));
+        let (shape, old) = npy(&dir.path().join("group.npy"));
+        let (shape2, new) = npy(&dir.path().join(&out));
+        assert_eq!(shape, vec![3, 360, 24, 3]);
+        assert_eq!(shape2, shape);
+        let frame = 72;
+        for d in 0..3 {
+            let at = |f: usize| (d * 360 + f) * frame;
+            for f in (0..360).filter(|f| !(120..210).contains(f)) {
+                for i in at(f)..at(f + 1) {
+                    assert!(
+                        (old[i] - new[i]).abs() <= 1e-4,
+                        "{edited}: dancer {d}, frame {f}"
+                    );
+                }
+            }
+        }
+    }
+    // A missing dancer's file is named; so are a group given to a solo edit and the wrong count.
+    std::fs::rename(p("group_2.npz"), p("away.npz")).unwrap();
+    refused(
+        &[
+            "generate",
+            "--edit",
+            &p("group_0.npz"),
+            "--regenerate",
+            "4-7",
+            "-o",
+            &p("x.npz"),
+        ],
+        &["group_2.npz", "is missing"],
+    );
+    std::fs::rename(p("away.npz"), p("group_2.npz")).unwrap();
+    refused(
+        &[
+            "generate",
+            "--edit",
+            &p("group.npz"),
+            "--regenerate",
+            "4-7",
+            "--dancers",
+            "4",
+            "-o",
+            &p("x.npz"),
+        ],
+        &["--edit", "3 dancers", "has 4"],
+    );
+    refused(
+        &[
+            "generate",
+            &s,
+            "--start",
+            "60",
+            "--end",
+            "66",
+            "--continue-from",
+            &p("group.npz"),
+            "--system",
+            "solo",
+            "-o",
+            &p("x.npz"),
+        ],
+        &["--continue-from", "3 dancers", "--system group"],
+    );
+    assert!(!dir.path().join("x.npz").exists() && !dir.path().join("x_0.npz").exists());
+}

@@ -204,3 +204,48 @@ fn kept_arms_from_one_motion_go_to_every_dancer() {
     eprintln!("kept arms: closest pair of roots {closest:.2} m");
     assert!(closest > 0.3, "two dancers' roots {closest:.2} m apart");
 }
+
+#[test]
+fn every_dancer_reaches_a_keyframe_where_it_stands() {
+    use dancegen_generate::edit::KeyframePose;
+    let original = base();
+    // Dancer 1's pose at frame 100 (its height over the floor), reached by all at 40 s of
+    // the song, 10 s into the dance.
+    let m = &original[1];
+    let key = KeyframePose {
+        spec: "pose@40".into(),
+        t: 40.0,
+        pose: m.poses[100 * 72..101 * 72].to_vec(),
+        trans: [0.0, m.trans[100 * 3 + 1], 0.0],
+    };
+    let edit = Edit {
+        keyframes: vec![key.clone()],
+        ..Edit::default()
+    };
+    let made = group(6, edit);
+    let f = 300;
+    for (k, d) in made.iter().enumerate() {
+        assert_eq!(d.poses[f * 72..(f + 1) * 72], key.pose[..], "dancer {k}");
+        assert!(
+            (d.trans[f * 3 + 1] - key.trans[1]).abs() < 1e-6,
+            "dancer {k}"
+        );
+        let j = joints(d);
+        let around = f..f + 1;
+        let q = edit_quality(&j, &j, std::slice::from_ref(&around), 30.0).unwrap();
+        eprintln!("group keyframe, dancer {k}: {q:?}");
+        let ratio = q.join_jerk_ratio.expect("joins inside the dance");
+        assert!(
+            ratio < 1.5,
+            "dancer {k}: jerk ratio {ratio:.2} around the keyframe"
+        );
+    }
+    // Each reaches it where it stands: the dancers are still apart there.
+    let x: Vec<f32> = made.iter().map(|d| d.trans[f * 3]).collect();
+    let spread =
+        x.iter().cloned().fold(f32::MIN, f32::max) - x.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(
+        spread > 0.5,
+        "the dancers' x at the keyframe span {spread:.2} m"
+    );
+}

@@ -2,8 +2,8 @@
 //! the files it takes from the edited job, and the library edit the worker runs.
 //!
 //! The new job's folder gets its own copy of the edited job's song, leader and the edited
-//! variation's `.npz` ([`EDITED_DANCE`]), so it runs, and can run again after a restart,
-//! whatever happens to the job it edits.
+//! variation's `.npz` ([`EDITED_DANCE`]; a group's `edited_K.npz`, one per dancer), so it runs,
+//! and can run again after a restart, whatever happens to the job it edits.
 
 use std::path::Path;
 
@@ -105,10 +105,18 @@ pub fn take_files(
     if let Some(l) = &row.leader {
         copy(l, l)?;
     }
-    copy(
-        &format!("{}.npz", variation_stem(e.variation)),
-        EDITED_DANCE,
-    )?;
+    let stem = variation_stem(e.variation);
+    if from.join(format!("{stem}.npz")).is_file() {
+        copy(&format!("{stem}.npz"), EDITED_DANCE)?;
+    } else {
+        // A group wrote one file per dancer, STEM_0.npz …; the copies keep the numbering, and
+        // their records name the group.
+        let group = EDITED_DANCE.trim_end_matches(".npz");
+        let dancers = row.params.dancers.unwrap_or(1).max(1);
+        for k in 0..dancers {
+            copy(&format!("{stem}_{k}.npz"), &format!("{group}_{k}.npz"))?;
+        }
+    }
     let base = load_dance(to).map_err(|err| ApiError::field("edit.of", err.to_string()))?;
     if e.extend {
         let bytes: std::sync::Arc<[u8]> = std::fs::read(to.join(&row.song))
@@ -143,7 +151,7 @@ pub fn take_files(
 }
 
 fn load_dance(dir: &Path) -> Result<GivenMotion, GenerateError> {
-    GivenMotion::load(
+    GivenMotion::load_dance(
         &dir.join(EDITED_DANCE),
         "the dance to edit",
         None,

@@ -448,3 +448,52 @@ fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
     assert_eq!(r.status, 400, "{}", r.json);
     assert_eq!(r.json["field"], "song");
 }
+
+#[test]
+fn a_group_edit_keeps_every_dancer_outside_its_range() {
+    let s = start(Limits::default());
+    let r = s.submit_song(
+        &demo_song(),
+        r#"{"system": "group", "dancers": 3, "seed": 1, "end": 10}"#,
+    );
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+
+    let params = format!(r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]]}}}}"#);
+    let r = s.submit(&[("params", None, params.as_bytes())]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let eid = r.json["id"].as_str().unwrap().to_string();
+    let edited = s.wait(&eid, JOB_TIMEOUT);
+    assert_eq!(edited["state"], "done", "{edited}");
+    assert_eq!(edited["params"]["system"], "group");
+    assert_eq!(edited["dancers"], 3);
+    // The group's .npy is (N, T, 24, 3): every dancer's kept frames unchanged.
+    let npy = |job: &Value| {
+        let bytes = s.download(job["variations"][0]["files"]["npy"].as_str().unwrap());
+        dancegen_io::npy::parse_npy(&bytes).unwrap().data
+    };
+    let (old, new) = (npy(&job), npy(&edited));
+    assert_eq!(old.len(), new.len());
+    let (frame, frames) = (72, 300);
+    assert_eq!(old.len(), 3 * frames * frame);
+    for d in 0..3 {
+        let at = |f: usize| (d * frames + f) * frame;
+        for f in (0..frames).filter(|f| !(90..180).contains(f)) {
+            for i in at(f)..at(f + 1) {
+                assert!(
+                    (old[i] - new[i]).abs() <= 1e-4,
+                    "dancer {d}, frame {f} changed"
+                );
+            }
+        }
+        let moved = (at(90)..at(180))
+            .map(|i| (old[i] - new[i]).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            moved > 0.02,
+            "dancer {d}: the range is the old one ({moved} m)"
+        );
+    }
+}
