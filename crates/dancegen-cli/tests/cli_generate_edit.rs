@@ -660,3 +660,82 @@ fn a_group_is_edited_through_the_files_it_wrote() {
     );
     assert!(!dir.path().join("x.npz").exists() && !dir.path().join("x_0.npz").exists());
 }
+
+#[test]
+fn a_holistic_dance_is_edited_with_its_fingers_and_face() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let s = song();
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &s,
+        "--system",
+        "holistic",
+        "--start",
+        "60",
+        "--end",
+        "72",
+        "-o",
+        &p("h.npz"),
+    ]));
+    // The record gives the song, the start and the system; the .npz holds fingers and face.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("h.npz"),
+        "--regenerate",
+        "4-7",
+        "--seed",
+        "3",
+        "-o",
+        &p("h2.npz"),
+    ]));
+    let read = |name: &str| {
+        let m = dancegen_io::npz::read_npz_members(
+            &dir.path().join(name),
+            &["poses", dancegen_formats::smpl_npz::FACE_MEMBER],
+        )
+        .unwrap();
+        (m[0].1.clone(), m[1].1.clone())
+    };
+    let ((poses, face), (poses2, face2)) = (read("h.npz"), read("h2.npz"));
+    assert_eq!(poses.shape, vec![360, 156]);
+    assert_eq!(poses2.shape, poses.shape);
+    assert_eq!(face2.shape, vec![360, 52]);
+    for f in (0..360).filter(|f| !(120..210).contains(f)) {
+        assert_eq!(
+            poses.data[f * 156..(f + 1) * 156],
+            poses2.data[f * 156..(f + 1) * 156],
+            "frame {f}"
+        );
+        assert_eq!(
+            face.data[f * 52..(f + 1) * 52],
+            face2.data[f * 52..(f + 1) * 52],
+            "frame {f}"
+        );
+    }
+    let moved = (120 * 156..210 * 156)
+        .map(|i| (poses.data[i] - poses2.data[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.05, "the range is the old one");
+    // What SoulNet's tokens cannot hold is refused, naming it.
+    refused(
+        &[
+            "generate",
+            "--edit",
+            &p("h.npz"),
+            "--regenerate",
+            "4-7",
+            "--keep-joints",
+            "arms",
+            "--from",
+            &p("h.npz"),
+            "-o",
+            &p("x.npz"),
+        ],
+        &["--keep-joints", "holistic"],
+    );
+    assert!(!dir.path().join("x.npz").exists());
+}

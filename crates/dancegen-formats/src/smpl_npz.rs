@@ -307,7 +307,7 @@ pub fn write_smpl_npz_recorded(
 ) -> Result<(), ReprError> {
     m.validate()?;
     write_amass(
-        path, &m.poses, POSE_DIMS, &m.trans, m.fps, None, record, opts,
+        path, &m.poses, POSE_DIMS, &m.trans, m.fps, None, record, None, opts,
     )
 }
 
@@ -333,6 +333,24 @@ pub fn write_smplh_npz(
     fps: f32,
     opts: &SmplNpzOptions,
 ) -> Result<(), ReprError> {
+    write_smplh_npz_with(path, poses, trans, fps, None, None, opts)
+}
+
+/// The member of an SMPL-H `.npz` that holds the face ([`write_smplh_npz_with`]): `(T, 52)`
+/// ARKit blendshape weights in `[0, 1]`, float32. Ours; AMASS readers ignore it.
+pub const FACE_MEMBER: &str = "face_arkit52";
+
+/// [`write_smplh_npz`] plus, when given, the face as [`FACE_MEMBER`] (`(T, 52)`) and `record`
+/// as [`RECORD_MEMBER`], so that the dance can be edited with its fingers and face.
+pub fn write_smplh_npz_with(
+    path: &Path,
+    poses: &[f32],
+    trans: &[f32],
+    fps: f32,
+    face: Option<&[f32]>,
+    record: Option<&str>,
+    opts: &SmplNpzOptions,
+) -> Result<(), ReprError> {
     let width = SMPLH_JOINTS * 3;
     let t = dancegen_motion::repr::frames_of("SMPL-H poses", poses, width)?;
     let tt = dancegen_motion::repr::frames_of("SMPL-H trans", trans, 3)?;
@@ -346,6 +364,14 @@ pub fn write_smplh_npz(
     if !(fps.is_finite() && fps > 0.0) {
         return Err(ReprError::Invalid(format!("fps {fps} is not positive")));
     }
+    if let Some(f) = face
+        && f.len() != t * FACE_WEIGHTS
+    {
+        return Err(ReprError::Invalid(format!(
+            "the face has {} values for {t} frames of {FACE_WEIGHTS} weights",
+            f.len()
+        )));
+    }
     write_amass(
         path,
         poses,
@@ -353,9 +379,49 @@ pub fn write_smplh_npz(
         trans,
         fps,
         Some(WRITTEN_GENDER),
-        None,
+        record,
+        face,
         opts,
     )
+}
+
+/// ARKit weights per frame in [`FACE_MEMBER`].
+pub const FACE_WEIGHTS: usize = 52;
+
+/// The rotations and face [`read_smplh_face`] reads.
+#[derive(Clone, Debug)]
+pub struct SmplhFace {
+    /// `(T, 156)` as stored (the root orientation in the file's up-axis convention).
+    pub poses: Vec<f32>,
+    /// `(T, 52)` ARKit weights.
+    pub face: Vec<f32>,
+}
+
+/// The full SMPL-H rotations `(T, 156)` and the face `(T, 52)` of an `.npz`
+/// [`write_smplh_npz_with`] wrote, at the file's rate (with its `trans` as stored); `None` for
+/// a file without the face (any other `.npz`).
+pub fn read_smplh_face(path: &Path) -> Result<Option<SmplhFace>, ReprError> {
+    let members = dancegen_io::npz::read_npz_members(path, &["poses", FACE_MEMBER])
+        .map_err(|e| ReprError::Invalid(e.to_string()))?;
+    let get = |name: &str| members.iter().find(|(n, _)| n == name).map(|(_, a)| a);
+    let (Some(poses), Some(face)) = (get("poses"), get(FACE_MEMBER)) else {
+        return Ok(None);
+    };
+    let t = face.data.len() / FACE_WEIGHTS;
+    if face.shape != [t, FACE_WEIGHTS] || poses.shape != [t, SMPLH_JOINTS * 3] {
+        return Err(ReprError::Invalid(format!(
+            "{}: {FACE_MEMBER} {:?} and poses {:?} are not (T, {FACE_WEIGHTS}) and (T, {})",
+            path.display(),
+            face.shape,
+            poses.shape,
+            SMPLH_JOINTS * 3
+        )));
+    }
+    let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    Ok(Some(SmplhFace {
+        poses: f32s(&poses.data),
+        face: f32s(&face.data),
+    }))
 }
 
 /// The AMASS-style writer behind [`write_smpl_npz`] and [`write_smplh_npz`]: `poses` is
@@ -369,6 +435,7 @@ fn write_amass(
     fps: f32,
     gender: Option<&str>,
     record: Option<&str>,
+    face: Option<&[f32]>,
     opts: &SmplNpzOptions,
 ) -> Result<(), ReprError> {
     let t = trans.len() / 3;
@@ -393,6 +460,10 @@ fn write_amass(
     members.push(("mocap_framerate", &[], NpyData::F64(&fps)));
     if let Some(r) = record {
         members.push((RECORD_MEMBER, &[], NpyData::Str(r)));
+    }
+    let face_shape = [t, FACE_WEIGHTS];
+    if let Some(f) = face {
+        members.push((FACE_MEMBER, &face_shape, NpyData::F32(f)));
     }
     write_npz(path, &members)?;
     Ok(())

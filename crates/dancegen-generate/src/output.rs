@@ -360,7 +360,7 @@ pub(crate) fn write_all(
         if let Some(parts) = &dance.holistic
             && !p.format.is_preview()
         {
-            holistic::write(&tmp, dest, p.format, p.request.rig, parts, &motion)?;
+            holistic::write(&tmp, dest, p.format, p.request.rig, parts, &motion, record)?;
             done += n;
             tracker.advance(stage::WRITE_OUTPUTS, done, total);
             continue;

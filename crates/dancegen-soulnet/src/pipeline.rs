@@ -15,7 +15,7 @@ use dancegen_nn::progress::{Cancelled, StepHook, step};
 use crate::bundle::HolisticModel;
 use crate::config::SamplingDefaults;
 use crate::generator::{Condition, music_tokens};
-use crate::layout::{MUSIC_DIMS, TOTAL_DIMS};
+use crate::layout::{MUSIC_DIMS, PART_DIMS, TOTAL_DIMS};
 
 /// The part name progress is reported under (one unit per window).
 pub const TOKENS: &str = "tokens";
@@ -44,6 +44,9 @@ pub struct Generated {
     pub rows: Vec<f32>,
     pub frames: usize,
     pub windows: usize,
+    /// Windows the masked transformer sampled (fewer than `windows` where an edit knows every
+    /// token of some).
+    pub sampled: usize,
     /// Token index (per part) where each window after the first starts being new.
     pub joins: Vec<usize>,
 }
@@ -83,6 +86,21 @@ pub fn generate(
     device: &Device,
     hook: &dyn StepHook,
 ) -> Result<Generated, GenerateError> {
+    generate_known(model, music, None, opts, device, hook)
+}
+
+/// [`generate`] around tokens that are already known (an edit, [`known_tokens`]):
+/// `known[(part · n + t) · q + level]`, negative where unknown. Known tokens are given to the
+/// masked transformer of every window that covers them, as the overlap of the window before
+/// is, and keep all their residual levels; a window with nothing unknown is not sampled.
+pub fn generate_known(
+    model: &HolisticModel,
+    music: &[f32],
+    known: Option<&[i64]>,
+    opts: &GenerateOptions,
+    device: &Device,
+    hook: &dyn StepHook,
+) -> Result<Generated, GenerateError> {
     if music.is_empty() || !music.len().is_multiple_of(MUSIC_DIMS) {
         return Err(GenerateError::Invalid(format!(
             "music features must be whole {MUSIC_DIMS}-value frames (got {} values)",
@@ -98,7 +116,18 @@ pub fn generate(
     let starts = window_starts(n, w, opts.sampling.overlap_tokens);
     // tokens[(part · n + t) · q + level]; negative = not made yet.
     let mut tokens = vec![-1i64; 3 * n * q];
+    let given = |part: usize, t: usize| known.is_some_and(|k| k[(part * n + t) * q] >= 0);
+    if let Some(k) = known {
+        if k.len() != tokens.len() {
+            return Err(GenerateError::Invalid(format!(
+                "{} known token values for {n} tokens of 3 parts with {q} levels",
+                k.len()
+            )));
+        }
+        tokens.copy_from_slice(k);
+    }
     let mut made = 0usize;
+    let mut sampled = 0usize;
     let mut joins = Vec::new();
     for (k, &s) in starts.iter().enumerate() {
         if k > 0 {
@@ -108,12 +137,21 @@ pub fn generate(
             .seed
             .wrapping_mul(0x9E37_79B9_7F4A_7C15)
             .wrapping_add(k as u64);
+        let fixed = |p: usize| {
+            let t = s + p % w;
+            t < made || given(p / w, t)
+        };
+        if (0..3 * w).all(fixed) {
+            made = s + w;
+            step(hook, TOKENS, k + 1, starts.len())?;
+            continue;
+        }
+        sampled += 1;
         let cond = window_condition(model, music, frames, s * fpt, w * fpt, device);
         let known: Vec<i64> = (0..3 * w)
             .map(|p| {
-                let t = s + p % w;
-                if t < made {
-                    tokens[((p / w) * n + t) * q]
+                if fixed(p) {
+                    tokens[((p / w) * n + s + p % w) * q]
                 } else {
                     -1
                 }
@@ -146,7 +184,7 @@ pub fn generate(
         };
         for p in 0..3 * w {
             let t = s + p % w;
-            if t < made {
+            if fixed(p) {
                 continue;
             }
             let g = ((p / w) * n + t) * q;
@@ -168,8 +206,75 @@ pub fn generate(
         rows,
         frames,
         windows: starts.len(),
+        sampled,
         joins,
     })
+}
+
+/// The tokens of what is known of a dance, for [`generate_known`]: `rows` are `(frames, 675)`
+/// split rows in data units (anything where unknown), `known[f][part]` whether frame `f`'s
+/// body, hands or face is known. Each stretch of frames with something known is encoded on
+/// its own (what lies outside it is never seen), the unknown parts of its frames at the data
+/// mean; a part's token is known when every frame it covers has that part known.
+pub fn known_tokens(
+    model: &HolisticModel,
+    rows: &[f32],
+    known: &[[bool; 3]],
+    device: &Device,
+) -> Vec<i64> {
+    let frames = known.len();
+    assert_eq!(rows.len(), frames * TOTAL_DIMS, "one row per frame");
+    let fpt = model.config.vq.frames_per_token();
+    let q = model.config.vq.levels();
+    let n = frames.div_ceil(fpt);
+    let mut out = vec![-1i64; 3 * n * q];
+    let any = |f: usize| known[f].iter().any(|&k| k);
+    let offsets = [0, PART_DIMS[0], PART_DIMS[0] + PART_DIMS[1]];
+    let mut f = 0;
+    while f < frames {
+        if !any(f) {
+            f += 1;
+            continue;
+        }
+        let a = f;
+        while f < frames && any(f) {
+            f += 1;
+        }
+        let (ta, tb) = (a / fpt, f.div_ceil(fpt));
+        let len = (tb - ta) * fpt;
+        let mut x = vec![0f32; len * TOTAL_DIMS];
+        for i in 0..len {
+            let g = (ta * fpt + i).clamp(a, f - 1);
+            let row = &mut x[i * TOTAL_DIMS..(i + 1) * TOTAL_DIMS];
+            row.copy_from_slice(&rows[g * TOTAL_DIMS..(g + 1) * TOTAL_DIMS]);
+            model.norm.transform(row);
+            for part in 0..3 {
+                if !known[g][part] {
+                    row[offsets[part]..offsets[part] + PART_DIMS[part]].fill(0.0);
+                }
+            }
+        }
+        let x = Tensor::<3>::from_data(TensorData::new(x, [1, len, TOTAL_DIMS]), device);
+        let idx: Vec<i64> = model
+            .vq
+            .encode(x)
+            .into_data()
+            .convert::<i64>()
+            .try_into_vec::<i64>()
+            .expect("int tokens");
+        let m = tb - ta;
+        for part in [0usize, 1, 2] {
+            for t in ta..tb {
+                let covered = (t * fpt..((t + 1) * fpt).min(frames)).all(|g| known[g][part]);
+                if covered {
+                    let from = (part * m + t - ta) * q;
+                    let to = (part * n + t) * q;
+                    out[to..to + q].copy_from_slice(&idx[from..from + q]);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The music condition of frames `[start, start + len)` (the song's last frame repeated past

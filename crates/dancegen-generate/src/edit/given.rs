@@ -21,6 +21,17 @@ pub struct GivenMotion {
     pub motion: SmplMotion,
     /// Every dancer of a group, in order; empty for one dancer.
     pub group: Vec<SmplMotion>,
+    /// The fingers and face of a holistic dance dancegen wrote (its `.npz` holds them), frame
+    /// for frame with `motion`.
+    pub holistic: Option<HolisticGiven>,
+}
+
+/// The fingers and face of a given dance: SMPL-H 52 local rotations `(T, 156)` (the body's
+/// first 22 joints as in `motion`) and the 52 ARKit weights `(T, 52)`, at 30 fps.
+#[derive(Clone, Debug)]
+pub struct HolisticGiven {
+    pub poses: Vec<f32>,
+    pub face: Vec<f32>,
 }
 
 impl GivenMotion {
@@ -119,7 +130,11 @@ impl GivenMotion {
                 )));
             }
         };
-        Self::checked(path.display().to_string(), m)
+        let mut given = Self::checked(path.display().to_string(), m)?;
+        if group {
+            given.holistic = holistic_of(path, &given.motion)?;
+        }
+        Ok(given)
     }
 
     /// `m` under `label`, refused when it holds NaN or infinite values.
@@ -138,6 +153,7 @@ impl GivenMotion {
             label,
             motion,
             group: Vec::new(),
+            holistic: None,
         }
     }
 
@@ -163,6 +179,7 @@ impl GivenMotion {
             label,
             motion: first.motion.clone(),
             group: dancers.into_iter().map(|d| d.motion).collect(),
+            holistic: None,
         })
     }
 
@@ -232,4 +249,39 @@ pub fn dance_file(path: &Path) -> PathBuf {
     } else {
         path.to_path_buf()
     }
+}
+
+/// The fingers and face of `path` when it is a holistic `.npz` dancegen wrote at 30 fps with
+/// `body`'s frames (`None` otherwise: other files give the body alone).
+fn holistic_of(path: &Path, body: &SmplMotion) -> Result<Option<HolisticGiven>, GenerateError> {
+    let is_npz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+    if !is_npz {
+        return Ok(None);
+    }
+    let Some(dancegen_formats::smpl_npz::SmplhFace { poses, face }) =
+        dancegen_formats::smpl_npz::read_smplh_face(path)
+            .map_err(|e| GenerateError::Invalid(e.to_string()))?
+    else {
+        return Ok(None);
+    };
+    let t = body.frames();
+    if poses.len() != t * 156 || face.len() != t * 52 {
+        // Not at the generator's rate: the body was resampled, the extras were not.
+        return Ok(None);
+    }
+    // The file's root orientation is stored in its up-axis convention; the body joints are
+    // taken as the motion reader gave them, the fingers (local rotations) as stored.
+    let mut poses = poses;
+    for f in 0..t {
+        poses[f * 156..f * 156 + 66].copy_from_slice(&body.poses[f * 72..f * 72 + 66]);
+    }
+    if poses.iter().chain(&face).any(|v| !v.is_finite()) {
+        return Err(GenerateError::Invalid(format!(
+            "{}: its fingers or face hold NaN or infinite values",
+            path.display()
+        )));
+    }
+    Ok(Some(HolisticGiven { poses, face }))
 }

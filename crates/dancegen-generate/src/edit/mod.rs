@@ -21,7 +21,7 @@ mod joints;
 mod keyframe;
 mod known;
 
-pub use given::{GivenMotion, dance_file};
+pub use given::{GivenMotion, HolisticGiven, dance_file};
 pub use joints::{legs_mask, parse_joint_set, with_ancestors};
 pub use keyframe::{KeyframePose, parse_keyframe_spec};
 pub use known::{ALL_JOINTS, KnownParts};

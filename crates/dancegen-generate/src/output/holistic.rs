@@ -30,7 +30,7 @@ use dancegen_formats::fbx::{FbxOptions, write_fbx};
 use dancegen_formats::gltf::{DancerAnimation, FaceAnimation, GlbOptions, write_glb_with_face};
 use dancegen_formats::livelink_csv;
 use dancegen_formats::rig::Rig;
-use dancegen_formats::smpl_npz::{BODY_JOINTS, SMPLH_JOINTS, SmplNpzOptions, write_smplh_npz};
+use dancegen_formats::smpl_npz::{BODY_JOINTS, SMPLH_JOINTS, SmplNpzOptions, write_smplh_npz_with};
 use dancegen_motion::face::ARKIT_NAMES;
 use dancegen_motion::fk::fk_axis_angle_f32;
 use dancegen_motion::repr::motion::SmplMotion;
@@ -38,6 +38,7 @@ use dancegen_motion::skeleton::{SMPLH52_NAMES, SMPLH52_PARENTS, Skeleton};
 
 use super::{OutputFormat, about_dest};
 use crate::error::GenerateError;
+use crate::record::DanceRecord;
 use crate::system::HolisticParts;
 
 /// The head joint of SMPL-H 52 (the face rides on it).
@@ -52,6 +53,7 @@ pub(super) fn write(
     rig: Rig,
     parts: &HolisticParts,
     motion: &LoadedMotion,
+    record: &DanceRecord,
 ) -> Result<(), GenerateError> {
     let bad = |reason: String| GenerateError::Output {
         path: dest.to_path_buf(),
@@ -97,11 +99,13 @@ pub(super) fn write(
                 .map_err(|e| bad(e.to_string()))?;
             write_bvh_file(tmp, &b, &BvhWriteOptions::default()).map_err(|e| here(&e))
         }
-        OutputFormat::Npz => write_smplh_npz(
+        OutputFormat::Npz => write_smplh_npz_with(
             tmp,
             &parts.poses,
             &parts.trans,
             fps,
+            Some(parts.face.as_slice()),
+            Some(&record.to_json()),
             &SmplNpzOptions::default(),
         )
         .map_err(|e| here(&e)),

@@ -14,6 +14,7 @@ use dancegen_nn::burn::tensor::Device;
 use dancegen_soulnet::bundle::HolisticModel;
 use dancegen_soulnet::pipeline::{self, GenerateOptions, TOKENS};
 
+use crate::edit;
 use crate::error::GenerateError;
 use crate::song::FPS;
 use crate::system::CommonOptions;
@@ -53,6 +54,7 @@ impl DanceSystem for Holistic {
     const MODEL_KIND: &'static str = dancegen_soulnet::bundle::KIND;
     const DEFAULT_MODEL: &'static str = "soulnet-small";
     const PARTS: &'static [(&'static str, f64)] = &[(TOKENS, 1.0)];
+    const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::EXTEND, edit::CONTINUE];
 
     type Model = HolisticModel;
     type Options = HolisticOptions;
@@ -86,6 +88,9 @@ impl DanceSystem for Holistic {
         model: &HolisticModel,
         input: DanceInput<'_, HolisticOptions>,
     ) -> Result<Dance, GenerateError> {
+        if !input.common.edit.is_empty() {
+            return super::holistic_edit::edit(model, &input);
+        }
         let song = input.song;
         let span = song.span(input.common.start, input.common.end)?;
         if span.seconds() < MIN_SONG_SECONDS {

@@ -5,6 +5,7 @@ pub mod duet;
 pub mod group;
 mod group_edit;
 pub mod holistic;
+mod holistic_edit;
 pub mod solo;
 
 /// A system users can name.
