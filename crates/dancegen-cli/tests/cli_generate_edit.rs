@@ -208,7 +208,7 @@ fn a_continuation_starts_with_the_motions_last_second() {
         .map(|i| (first[from * 72 + i] - next[i]).abs())
         .fold(0.0, f64::max);
     assert!(worst <= 1e-4, "the kept second moved {worst} m");
-    // Duet and group do not continue yet, and say so.
+    // A group continues a group: one dancer's motion is refused, the counts named.
     refused(
         &[
             "-q",
@@ -223,7 +223,7 @@ fn a_continuation_starts_with_the_motions_last_second() {
             "-o",
             &p("g.npy"),
         ],
-        &["--continue-from is not supported by --system group"],
+        &["--continue-from", "1 dancer, and this group dance has 3"],
     );
 }
 

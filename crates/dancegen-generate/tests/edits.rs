@@ -213,9 +213,35 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
     let e = generator()
         .run(&group, &|_| {}, &CancelToken::new())
         .unwrap_err();
+    // A group edits a group: one dancer's dance is refused, the counts named.
     assert!(
         e.to_string()
-            .contains("--edit/--regenerate is not supported by --system group"),
+            .contains("1 dancer, and this group dance has 3"),
+        "{e}"
+    );
+    // What a system does not apply is refused by name.
+    let (arms, _) = dancegen_generate::edit::parse_joint_set("--keep-joints", "arms").unwrap();
+    let mut holistic = solo(
+        0,
+        60.0,
+        None,
+        Edit {
+            keep_joints: Some(dancegen_generate::edit::KeepJoints {
+                spec: "arms".into(),
+                joints: arms,
+                root: false,
+                from: given.clone(),
+            }),
+            ..Edit::default()
+        },
+    );
+    holistic.system = SystemRequest::Holistic(Default::default());
+    let e = generator()
+        .run(&holistic, &|_| {}, &CancelToken::new())
+        .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("--keep-joints is not supported by --system holistic"),
         "{e}"
     );
     let outside = solo(

@@ -7,7 +7,7 @@ mod edit_common;
 
 use std::sync::OnceLock;
 
-use edit_common::{REAL_POSE_SPREAD_M, generator, joints, shared};
+use edit_common::{REAL_POSE_SPREAD_M, assert_joins, generator, joints, shared};
 
 use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, parse_joint_set};
 use dancegen_generate::request::CommonOptions;
@@ -92,14 +92,7 @@ fn a_regenerated_range_is_new_for_every_dancer_and_joins_the_kept_frames() {
             .new_difference_m;
         eprintln!("group regenerate, dancer {k}: {q:?}; another seed differs by {seeds:.3} m");
         assert!(q.kept_max_m <= 1e-4, "{q:?}");
-        let ratio = q.join_jerk_ratio.expect("joins inside the dance");
-        assert!(ratio < 1.5, "dancer {k}: boundary jerk ratio {ratio:.2}");
-        assert!(
-            q.join_root_step_m <= q.other_root_step_m + 0.05,
-            "dancer {k}: root step {:.3} m at a join against {:.3} m elsewhere",
-            q.join_root_step_m,
-            q.other_root_step_m
-        );
+        assert_joins(&q, &format!("dancer {k}"));
         assert!(
             q.join_foot_slide_m <= q.other_foot_slide_m + 0.01,
             "dancer {k}: a planted foot slides {:.3} m in a frame at a join, {:.3} m elsewhere",
@@ -151,12 +144,7 @@ fn a_group_continued_starts_with_each_dancers_last_second() {
         let after = 30..m.frames();
         let q = edit_quality(&j, &j, std::slice::from_ref(&after), 30.0).unwrap();
         eprintln!("group continue, dancer {k}: {q:?}");
-        assert!(
-            q.join_root_step_m <= q.other_root_step_m + 0.05,
-            "dancer {k}: root step {:.3} m at the join against {:.3} m elsewhere",
-            q.join_root_step_m,
-            q.other_root_step_m
-        );
+        assert_joins(&q, &format!("dancer {k}"));
     }
 }
 
@@ -234,11 +222,7 @@ fn every_dancer_reaches_a_keyframe_where_it_stands() {
         let around = f..f + 1;
         let q = edit_quality(&j, &j, std::slice::from_ref(&around), 30.0).unwrap();
         eprintln!("group keyframe, dancer {k}: {q:?}");
-        let ratio = q.join_jerk_ratio.expect("joins inside the dance");
-        assert!(
-            ratio < 1.5,
-            "dancer {k}: jerk ratio {ratio:.2} around the keyframe"
-        );
+        assert_joins(&q, &format!("dancer {k}, around the keyframe"));
     }
     // Each reaches it where it stands: the dancers are still apart there.
     let x: Vec<f32> = made.iter().map(|d| d.trans[f * 3]).collect();

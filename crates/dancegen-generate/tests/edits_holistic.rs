@@ -5,7 +5,7 @@ mod edit_common;
 
 use std::sync::OnceLock;
 
-use edit_common::{REAL_POSE_SPREAD_M, generator, joints, shared};
+use edit_common::{REAL_POSE_SPREAD_M, assert_joins, generator, joints, shared};
 
 use dancegen_generate::edit::{Edit, GivenMotion, HolisticGiven};
 use dancegen_generate::request::{CommonOptions, OutputRequest};
@@ -115,14 +115,7 @@ fn a_regenerated_range_keeps_body_fingers_and_face_outside_it() {
          by {fingers:.3} rad on average in the new part"
     );
     assert!(q.kept_max_m <= 1e-4, "{q:?}");
-    let ratio = q.join_jerk_ratio.expect("joins inside the dance");
-    assert!(ratio < 1.5, "boundary jerk ratio {ratio:.2} at the joins");
-    assert!(
-        q.join_root_step_m <= q.other_root_step_m + 0.05,
-        "root step {:.3} m at a join against {:.3} m elsewhere",
-        q.join_root_step_m,
-        q.other_root_step_m
-    );
+    assert_joins(&q, "the edit");
     assert!(
         q.new_difference_m >= REAL_POSE_SPREAD_M / 2.0,
         "the new part differs by {:.3} m; another seed by {seeds:.3} m",
@@ -173,12 +166,5 @@ fn a_continued_dance_starts_with_the_last_second_fingers_and_face_included() {
     let after = 30..made.body.frames();
     let q = edit_quality(&j, &j, std::slice::from_ref(&after), 30.0).unwrap();
     eprintln!("holistic continue: {q:?}");
-    let ratio = q.join_jerk_ratio.expect("a join");
-    assert!(ratio < 1.5, "boundary jerk ratio {ratio:.2} at the join");
-    assert!(
-        q.join_root_step_m <= q.other_root_step_m + 0.05,
-        "root step {:.3} m at the join against {:.3} m elsewhere",
-        q.join_root_step_m,
-        q.other_root_step_m
-    );
+    assert_joins(&q, "the edit");
 }

@@ -38,3 +38,21 @@ pub fn joints(m: &SmplMotion) -> Vec<f64> {
         .map(f64::from)
         .collect()
 }
+
+/// The join bounds on `q` (an edit's figures, `what` naming it for messages): a
+/// boundary-jerk ratio under 1.5 at the joins, and no root step at a join more than 5 cm beyond
+/// the dance's own largest.
+#[allow(dead_code)]
+pub fn assert_joins(q: &dancegen_metrics::edit::EditQuality, what: &str) {
+    let ratio = q.join_jerk_ratio.expect("joins inside the dance");
+    assert!(
+        ratio < 1.5,
+        "{what}: boundary jerk ratio {ratio:.2} at the joins"
+    );
+    assert!(
+        q.join_root_step_m <= q.other_root_step_m + 0.05,
+        "{what}: root step {:.3} m at a join against {:.3} m elsewhere",
+        q.join_root_step_m,
+        q.other_root_step_m
+    );
+}
