@@ -8,7 +8,7 @@
 //! - otherwise every known value of the window's new frames is a hard cue in window
 //!   coordinates (slots sorted, roots minus the window's origin), imposed as the window's
 //!   prefix is ([`crate::config::PrefixMode`]), and a dancer whose root is known on a frame
-//!   that is not wholly known gets the formation-control flag there, as a requested path does
+//!   where the rest of it is not gets the formation-control flag there, as a requested path does
 //!   (the network was trained to read a clean root under that flag).
 //!
 //! The sampler's last step writes the clean cued values, so known values come back exactly
@@ -94,7 +94,6 @@ impl GroupKnown<'_> {
             if g >= self.frames() {
                 break;
             }
-            let whole = self.frame_known(g, n);
             let norm = self.normalised(g, n, scale, shift);
             for (s, &d) in perm.iter().enumerate() {
                 for c in 0..DIMS {
@@ -109,6 +108,7 @@ impl GroupKnown<'_> {
                     cue.values[i] = v;
                     cue.mask[i] = 1.0;
                 }
+                let whole = (0..DIMS).all(|c| self.is_known(g, channel(d, c)));
                 if !whole && self.root_known(g, d) {
                     cue.flags[f * N_MAX + s] = 1.0;
                 }

@@ -18,9 +18,8 @@ use dancegen_tcdiffpp::known::GroupKnown;
 use dancegen_tcdiffpp::layout::GROUP_DIMS;
 use dancegen_tcdiffpp::sampler::{GroupRequest, generate};
 
-use super::group::{
-    GroupOptions, MIN_GROUP_SECONDS, requested_paths, sample_options, separate, stage_report,
-};
+use super::group_options::{GroupOptions, MIN_GROUP_SECONDS};
+use super::group_stage::{requested_paths, sample_options, separate, stage_report};
 use super::solo::{fade_from_kept, floor_made_frames, lift_made_frames_above_floor};
 use crate::error::GenerateError;
 use crate::song::FPS;

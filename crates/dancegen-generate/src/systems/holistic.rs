@@ -4,7 +4,7 @@
 //! → SMPL-H 52 motion standing on the floor (its first 22 joints are also the SMPL 24 body every
 //! other output and the previews use) and 52 ARKit weights per frame.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dancegen_lodgepp::planted_feet::{clean_planted_feet, lock_planted_feet};
 use dancegen_motion::face::{FaceWeights, flame::FlameMapping};
@@ -21,31 +21,7 @@ use crate::system::CommonOptions;
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer, HolisticParts, Role};
 use crate::systems::solo::keep_feet_above_floor;
 
-/// Shortest music the model dances to.
-pub const MIN_SONG_SECONDS: f64 = 2.0;
-
-/// Holistic options beyond [`CommonOptions`]; the defaults are the shipped system.
-#[derive(Clone, Debug)]
-pub struct HolisticOptions {
-    /// Planted feet stay put: the solo system's root lock, and leg IK where the model's
-    /// `[sampling] foot_ik` asks for it, on the body (`dancegen_lodgepp::planted_feet`;
-    /// post-processing, not part of SoulNet). Without it the
-    /// held-out dances skate in 82 % of frames against the real 18 % (docs/holistic-eval.md).
-    pub foot_lock: bool,
-    /// A user's `(52, 103)` ARKit → FLAME mapping (`.npy`): the dance's face is then also given
-    /// as FLAME's 100 expression + 3 jaw values (`.json` key `"flame"`). FLAME and SoulNet's
-    /// mapping are not redistributable, so none is shipped.
-    pub flame_mapping: Option<PathBuf>,
-}
-
-impl Default for HolisticOptions {
-    fn default() -> Self {
-        HolisticOptions {
-            foot_lock: true,
-            flame_mapping: None,
-        }
-    }
-}
+pub use super::holistic_options::{HolisticOptions, MIN_SONG_SECONDS};
 
 pub struct Holistic;
 

@@ -33,7 +33,7 @@ use dancegen_soulnet::bundle::HolisticModel;
 use dancegen_soulnet::layout::TOTAL_DIMS;
 use dancegen_soulnet::pipeline::{self, GenerateOptions, generate_known, known_tokens};
 
-use super::holistic::{HolisticOptions, MIN_SONG_SECONDS};
+use super::holistic_options::{HolisticOptions, MIN_SONG_SECONDS};
 use super::solo::{floor_made_frames, lift_made_frames_above_floor};
 use crate::edit::{CONTINUE_SECONDS, GivenMotion, KnownParts};
 use crate::error::GenerateError;

@@ -4,8 +4,11 @@
 pub mod duet;
 pub mod group;
 mod group_edit;
+mod group_options;
+mod group_stage;
 pub mod holistic;
 mod holistic_edit;
+mod holistic_options;
 pub mod solo;
 
 /// A system users can name.
