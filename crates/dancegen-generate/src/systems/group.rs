@@ -20,7 +20,7 @@ use dancegen_refine::formation::order_left_to_right;
 use dancegen_tcdiffpp::bundle::GroupModel;
 pub use dancegen_tcdiffpp::config::LongSampler;
 use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, N_MIN};
-use dancegen_tcdiffpp::sampler::{GroupRequest, generate};
+use dancegen_tcdiffpp::sampler::GroupRequest;
 
 use crate::edit;
 use crate::error::GenerateError;
@@ -32,7 +32,7 @@ use crate::systems::solo::keep_feet_above_floor;
 
 pub use super::group_options::{GroupOptions, MAX_DANCERS, MIN_DANCERS, MIN_GROUP_SECONDS};
 use super::group_stage::{
-    requested_paths, sample_options, separate, stage_positions, stage_report,
+    requested_paths, sample_group, sample_options, separate, stage_positions, stage_report,
 };
 
 pub struct Group;
@@ -150,23 +150,7 @@ impl DanceSystem for Group {
             control: control.as_deref(),
             known: None,
         };
-        let t0 = std::time::Instant::now();
-        let raw = generate(
-            &model.net,
-            &model.schedule,
-            model.config.model.window(),
-            &req,
-            &sample,
-            input.device,
-            input.hook,
-        )?;
-        let sample_s = t0.elapsed().as_secs_f64();
-        if raw.iter().any(|v| !v.is_finite()) {
-            return Err(GenerateError::Generation(
-                "the model produced non-finite values (please report this with the song and seed)"
-                    .into(),
-            ));
-        }
+        let (raw, sample_s) = sample_group(model, &req, &sample, &input)?;
         let t1 = std::time::Instant::now();
         let d = Edge151::DIMS;
         let mut dancers: Vec<SmplMotion> = Vec::with_capacity(n);

@@ -16,10 +16,10 @@ use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_tcdiffpp::bundle::GroupModel;
 use dancegen_tcdiffpp::known::GroupKnown;
 use dancegen_tcdiffpp::layout::GROUP_DIMS;
-use dancegen_tcdiffpp::sampler::{GroupRequest, generate};
+use dancegen_tcdiffpp::sampler::GroupRequest;
 
 use super::group_options::{GroupOptions, MIN_GROUP_SECONDS};
-use super::group_stage::{requested_paths, sample_options, separate, stage_report};
+use super::group_stage::{requested_paths, sample_group, sample_options, separate, stage_report};
 use super::solo::{fade_from_kept, floor_made_frames, lift_made_frames_above_floor};
 use crate::error::GenerateError;
 use crate::song::FPS;
@@ -92,23 +92,7 @@ pub(super) fn edit(
             mask: &mask,
         }),
     };
-    let t0 = std::time::Instant::now();
-    let raw = generate(
-        &model.net,
-        &model.schedule,
-        model.config.model.window(),
-        &req,
-        &sample,
-        input.device,
-        input.hook,
-    )?;
-    let sample_s = t0.elapsed().as_secs_f64();
-    if raw.iter().any(|v| !v.is_finite()) {
-        return Err(GenerateError::Generation(
-            "the model produced non-finite values (please report this with the song and seed)"
-                .into(),
-        ));
-    }
+    let (raw, sample_s) = sample_group(model, &req, &sample, input)?;
     let t1 = std::time::Instant::now();
     let mut dancers: Vec<SmplMotion> = Vec::with_capacity(n);
     let mut moves: Vec<Vec<f32>> = Vec::with_capacity(n);

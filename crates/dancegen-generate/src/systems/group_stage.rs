@@ -8,12 +8,39 @@ use dancegen_refine::formation::{StagePos, order_left_to_right};
 use dancegen_tcdiffpp::bundle::GroupModel;
 use dancegen_tcdiffpp::config::LongSampler;
 use dancegen_tcdiffpp::layout::N_MAX;
-use dancegen_tcdiffpp::sampler::{GroupSampleOptions, RootXy};
+use dancegen_tcdiffpp::sampler::{GroupRequest, GroupSampleOptions, RootXy, generate};
 
 use super::group_options::GroupOptions;
 use crate::error::GenerateError;
 use crate::song::{FPS, Span};
-use crate::system::{CommonOptions, GroupReport};
+use crate::system::{CommonOptions, DanceInput, GroupReport};
+
+/// Samples `req` (raw frames `[frames, N_MAX·151]`, see `dancegen_tcdiffpp::sampler`) and the
+/// seconds it took; a non-finite value is an error, not a dance.
+pub(super) fn sample_group(
+    model: &GroupModel,
+    req: &GroupRequest,
+    sample: &GroupSampleOptions,
+    input: &DanceInput<'_, GroupOptions>,
+) -> Result<(Vec<f32>, f64), GenerateError> {
+    let t0 = std::time::Instant::now();
+    let raw = generate(
+        &model.net,
+        &model.schedule,
+        model.config.model.window(),
+        req,
+        sample,
+        input.device,
+        input.hook,
+    )?;
+    if raw.iter().any(|v| !v.is_finite()) {
+        return Err(GenerateError::Generation(
+            "the model produced non-finite values (please report this with the song and seed)"
+                .into(),
+        ));
+    }
+    Ok((raw, t0.elapsed().as_secs_f64()))
+}
 
 /// The sampling of a request: the model's defaults, the flags' overrides.
 pub(super) fn sample_options(

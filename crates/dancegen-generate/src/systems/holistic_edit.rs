@@ -72,7 +72,7 @@ pub(super) fn edit(
             *e = None;
         }
     }
-    let part_known: Vec<[bool; 3]> = (0..t)
+    let mut part_known: Vec<[bool; 3]> = (0..t)
         .map(|f| {
             let body = known.kept(f);
             let more = body && extras[f].is_some();
@@ -80,7 +80,7 @@ pub(super) fn edit(
         })
         .collect();
     let (poses, face) = holistic_values(&known, &extras);
-    let rows = split_rows(&poses, &known.motion.trans, &face, &part_known)?;
+    let rows = split_rows(&poses, &known.motion.trans, &face, &mut part_known)?;
     let tokens = known_tokens(model, &rows, &part_known, input.device);
     let mut opts = GenerateOptions::defaults(model, common.seed);
     if let Some(s) = common.steps {
@@ -228,12 +228,14 @@ fn holistic_values(
 
 /// SoulNet's split rows `(T, 675)` of the known frames: each stretch of frames with something
 /// known is encoded on its own (the representation's velocities reach one frame ahead, so a
-/// stretch's last frame repeats the row before it); rows of other frames are zero.
+/// stretch's last frame repeats the row before it); rows of other frames are zero. A lone
+/// kept frame has no velocity to encode: it is marked unknown to the tokens (its values are
+/// still spliced back).
 fn split_rows(
     poses: &[f32],
     trans: &[f32],
     face: &[f32],
-    part_known: &[[bool; 3]],
+    part_known: &mut [[bool; 3]],
 ) -> Result<Vec<f32>, GenerateError> {
     let t = part_known.len();
     let mut rows = vec![0f32; t * TOTAL_DIMS];
@@ -249,6 +251,7 @@ fn split_rows(
             f += 1;
         }
         if f - a < 2 {
+            part_known[a] = [false; 3];
             continue;
         }
         let ric = Holistic623::encode(
