@@ -297,8 +297,9 @@ pub const JOIN_CONTEXT: usize = 8;
 /// is blended into the kept frames around it (root onto the kept path at its start,
 /// rotations and height with their velocity, [`SeamBlend::Hermite`]), its root path ramped
 /// to meet the kept one at its end, the planted feet of the run locked (`lock`, as the
-/// windows' are), the root velocity handed over at both ends, and partly known frames eased
-/// into. Returns the frames (known values exact) and the largest root move that joined a run.
+/// windows' are), the root velocity handed over at both ends, partly known frames eased
+/// into, and the root moved onto floor positions known inside a run (the misses there
+/// interpolated, [`join_runs`]). Returns the frames (known values exact) and the largest root move that joined a run.
 pub fn join_made_runs(
     generated: &[f32],
     known: &KnownFrames,
@@ -352,6 +353,15 @@ pub fn join_made_runs(
         let mut misses = Vec::new();
         if a > 0 && known.root_known(a - 1) {
             misses.push((a - 1, [0.0, 0.0]));
+        }
+        // Root positions known inside the run (a keyframe's mark, a path): where the run's
+        // root missed them, so that the frames between and after follow them.
+        for g in (a..b).filter(|&g| known.root_known(g)) {
+            let at = (g - lo) * DIMS;
+            misses.push((
+                g,
+                ROOT_HORIZONTAL.map(|c| x[at + c] - known.values[g * DIMS + c]),
+            ));
         }
         if b < total && known.root_known(b) && b - a >= 2 {
             // Where the run's own root was heading at the kept frame after it.
@@ -786,6 +796,31 @@ mod tests {
             largest > 0.0 && largest < 0.5,
             "largest join move {largest}"
         );
+    }
+
+    #[test]
+    fn a_whole_made_dance_follows_root_positions_known_inside_it_and_after_them() {
+        // Nothing kept whole; the floor position known on frames 20..40 (a path) at x = 2 m.
+        // The made dance stands at x = 0: it must be on the path there and stay by it after,
+        // not step back to its own place.
+        let t = 60;
+        let generated = vec![0f32; t * DIMS];
+        let mut values = vec![0f32; t * DIMS];
+        let mut mask = vec![0f32; t * DIMS];
+        for f in 20..40 {
+            for c in ROOT_HORIZONTAL {
+                mask[f * DIMS + c] = 1.0;
+            }
+            values[f * DIMS + ROOT_HORIZONTAL[0]] = 2.0;
+        }
+        let (out, _) = join_made_runs(&generated, &KnownFrames { values, mask }, None);
+        let x: Vec<f32> = (0..t).map(|f| out[f * DIMS + ROOT_HORIZONTAL[0]]).collect();
+        assert!(x[20..40].iter().all(|&v| v == 2.0), "{x:?}");
+        let worst = x
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(0f32, f32::max);
+        assert!(worst < 1e-6, "a root step of {worst} m: {x:?}");
     }
 
     #[test]
