@@ -720,7 +720,42 @@ fn a_holistic_dance_is_edited_with_its_fingers_and_face() {
         .map(|i| (poses.data[i] - poses2.data[i]).abs())
         .fold(0.0, f64::max);
     assert!(moved > 0.05, "the range is the old one");
-    // What SoulNet's tokens cannot hold is refused, naming it.
+    // Kept arms fill the regenerated range: the arms are the old ones everywhere, the rest
+    // of the range is new.
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        "--edit",
+        &p("h.npz"),
+        "--regenerate",
+        "4-7",
+        "--keep-joints",
+        "arms",
+        "--from",
+        &p("h.npz"),
+        "--seed",
+        "4",
+        "-o",
+        &p("h3.npz"),
+    ]));
+    let (poses3, _) = read("h3.npz");
+    let arms = [13, 14, 16, 17, 18, 19, 20, 21];
+    for f in 0..360 {
+        for j in arms {
+            assert_eq!(
+                poses3.data[f * 156 + 3 * j..f * 156 + 3 * j + 3],
+                poses.data[f * 156 + 3 * j..f * 156 + 3 * j + 3],
+                "frame {f} joint {j}"
+            );
+        }
+    }
+    let legs = (120..210)
+        .flat_map(|f| [1, 2, 4, 5].map(|j| f * 156 + 3 * j))
+        .flat_map(|at| at..at + 3)
+        .map(|i| (poses.data[i] - poses3.data[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(legs > 0.05, "the legs of the range are the old ones");
+    // A keyframe where the dance is kept is refused, naming both, and nothing is written.
     refused(
         &[
             "generate",
@@ -728,14 +763,35 @@ fn a_holistic_dance_is_edited_with_its_fingers_and_face() {
             &p("h.npz"),
             "--regenerate",
             "4-7",
-            "--keep-joints",
-            "arms",
-            "--from",
-            &p("h.npz"),
+            "--keyframe",
+            &format!("{}@61", p("h.npz")),
             "-o",
             &p("x.npz"),
         ],
-        &["--keep-joints", "holistic"],
+        &["--keyframe", "already given by --edit/--regenerate"],
     );
     assert!(!dir.path().join("x.npz").exists());
+}
+
+#[test]
+fn the_readme_shows_the_table_of_edits_generate_help_prints() {
+    let o = dancegen(&["generate", "--help"]);
+    ok(&o);
+    let help = String::from_utf8_lossy(&o.stdout);
+    let readme = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md"),
+    )
+    .unwrap();
+    let table: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Edits (which system supports what):"))
+        .take_while(|l| !l.trim().is_empty())
+        .collect();
+    assert!(table.len() >= 6, "no table of edits in --help:\n{help}");
+    for line in table {
+        assert!(
+            readme.lines().any(|r| r.trim_end() == line.trim_end()),
+            "README.md does not have this line of `generate --help`'s table: {line:?}"
+        );
+    }
 }

@@ -221,7 +221,7 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
     );
     // What a system does not apply is refused by name.
     let (arms, _) = dancegen_generate::edit::parse_joint_set("--keep-joints", "arms").unwrap();
-    let mut holistic = solo(
+    let mut duet = solo(
         0,
         60.0,
         None,
@@ -235,13 +235,16 @@ fn unsupported_and_bad_edits_are_refused_before_any_work() {
             ..Edit::default()
         },
     );
-    holistic.system = SystemRequest::Holistic(Default::default());
+    duet.system = SystemRequest::Duet(dancegen_generate::systems::duet::DuetOptions::new(
+        original.clone(),
+        "leader",
+    ));
     let e = generator()
-        .run(&holistic, &|_| {}, &CancelToken::new())
+        .run(&duet, &|_| {}, &CancelToken::new())
         .unwrap_err();
     assert!(
         e.to_string()
-            .contains("--keep-joints is not supported by --system holistic"),
+            .contains("--keep-joints is not supported by --system duet"),
         "{e}"
     );
     let outside = solo(

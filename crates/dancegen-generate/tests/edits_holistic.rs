@@ -1,5 +1,6 @@
 //! Editing a holistic dance through the library (issue 44): a range made new and a dance
-//! continued, fingers and face included, with the shipped SoulNet model and a held-out song.
+//! continued, fingers and face included, kept joints, a keyframe and a path, with the shipped
+//! SoulNet model and a held-out song.
 
 mod edit_common;
 
@@ -7,7 +8,10 @@ use std::sync::OnceLock;
 
 use edit_common::{REAL_POSE_SPREAD_M, assert_joins, generator, joints, shared};
 
-use dancegen_generate::edit::{Edit, GivenMotion, HolisticGiven};
+use dancegen_generate::edit::{
+    Edit, GivenMotion, HolisticGiven, KeepJoints, KeyframePose, parse_joint_set,
+};
+use dancegen_generate::formation_file::FormationFile;
 use dancegen_generate::request::{CommonOptions, OutputRequest};
 use dancegen_generate::systems::holistic::HolisticOptions;
 use dancegen_generate::{CancelToken, Request, Song, SystemRequest};
@@ -167,4 +171,171 @@ fn a_continued_dance_starts_with_the_last_second_fingers_and_face_included() {
     let q = edit_quality(&j, &j, std::slice::from_ref(&after), 30.0).unwrap();
     eprintln!("holistic continue: {q:?}");
     assert_joins(&q, "the edit");
+}
+
+/// Mean joint jerk (m/s³) of a body, for comparing an edit with the plain dance.
+fn jerk(m: &SmplMotion) -> f64 {
+    let v = dancegen_metrics::longform::mean_joint_jerk(&joints(m), 30.0).unwrap();
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+#[test]
+fn kept_legs_and_root_stay_and_the_rest_is_new_fingers_and_face_included() {
+    let original = base();
+    let (mask, root) = parse_joint_set("--keep-joints", "lower").unwrap();
+    let edit = Edit {
+        keep_joints: Some(KeepJoints {
+            spec: "lower".into(),
+            joints: mask,
+            root,
+            from: GivenMotion::one("base".into(), original.body.clone()),
+        }),
+        ..Edit::default()
+    };
+    let made = holistic(5, edit);
+    let t = original.body.frames();
+    assert_eq!(made.body.frames(), t);
+    for f in 0..t {
+        for j in (0..24).filter(|j| mask & (1 << j) != 0) {
+            let at = f * 72 + 3 * j;
+            assert_eq!(
+                made.body.poses[at..at + 3],
+                original.body.poses[at..at + 3],
+                "frame {f} joint {j}"
+            );
+            assert_eq!(
+                made.poses[f * 156 + 3 * j..f * 156 + 3 * j + 3],
+                original.body.poses[at..at + 3],
+                "the SMPL-H rotations, frame {f} joint {j}"
+            );
+        }
+        assert_eq!(
+            made.body.trans[f * 3..f * 3 + 3],
+            original.body.trans[f * 3..f * 3 + 3],
+            "frame {f}"
+        );
+    }
+    // The arms are new: the wrists relative to the pelvis, mean distance.
+    let (jo, jm) = (joints(&original.body), joints(&made.body));
+    let mut d = 0.0;
+    for f in 0..t {
+        for j in [20, 21] {
+            d += (0..3)
+                .map(|c| {
+                    let rel = |m: &[f64]| m[(f * 24 + j) * 3 + c] - m[f * 72 + c];
+                    (rel(&jo) - rel(&jm)).powi(2)
+                })
+                .sum::<f64>()
+                .sqrt();
+        }
+    }
+    let d = d / (2 * t) as f64;
+    let fingers = (0..t * 156)
+        .filter(|i| i % 156 >= 66)
+        .map(|i| f64::from((made.poses[i] - original.poses[i]).abs()))
+        .sum::<f64>()
+        / (t * 90) as f64;
+    let (jerk_m, jerk_o) = (jerk(&made.body), jerk(&original.body));
+    eprintln!(
+        "holistic kept lower: wrists {d:.3} m from the original's, fingers {fingers:.3} rad; \
+         jerk {jerk_m:.0} against {jerk_o:.0}"
+    );
+    assert!(
+        d >= REAL_POSE_SPREAD_M / 2.0,
+        "the arms are the old ones ({d:.3} m)"
+    );
+    assert!(fingers > 0.01, "the fingers are the old ones ({fingers})");
+    assert!(
+        jerk_m <= 1.5 * jerk_o,
+        "jerk {jerk_m:.0} against {jerk_o:.0}"
+    );
+}
+
+#[test]
+fn a_keyframe_pose_is_reached_in_world_space_and_eased_into() {
+    let original = base();
+    // The base dance's frame 100, with its floor position, reached at 40 s of the song (the
+    // dance's frame 300) by a dance of another seed.
+    let key = KeyframePose {
+        spec: "base:100@40".into(),
+        t: 40.0,
+        pose: original.body.poses[100 * 72..101 * 72].to_vec(),
+        trans: [0, 1, 2].map(|c| original.body.trans[100 * 3 + c]),
+    };
+    let made = holistic(
+        6,
+        Edit {
+            keyframes: vec![key],
+            keyframe_root: true,
+            ..Edit::default()
+        },
+    );
+    let (jo, jm) = (joints(&original.body), joints(&made.body));
+    let worst = (0..24)
+        .map(|j| {
+            (0..3)
+                .map(|c| (jm[(300 * 24 + j) * 3 + c] - jo[(100 * 24 + j) * 3 + c]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    let around = 300..301;
+    let q = edit_quality(&jm, &jm, std::slice::from_ref(&around), 30.0).unwrap();
+    eprintln!(
+        "holistic keyframe: worst joint {worst:.4} m from the pose; {q:?}; jerk {:.0} against \
+         {:.0}",
+        jerk(&made.body),
+        jerk(&original.body)
+    );
+    assert!(
+        worst <= 0.03,
+        "a keyframed joint is {worst:.3} m from its target"
+    );
+    assert_joins(&q, "around the keyframe");
+}
+
+#[test]
+fn a_path_is_followed_and_the_dance_on_it_stays_whole() {
+    let json = r#"{"keyframes": [
+        {"t": 32, "positions": [[0, 0]]},
+        {"t": 40, "positions": [[1.5, 0.5]]},
+        {"t": 48, "positions": [[-1, 1]]}]}"#;
+    let file = FormationFile {
+        label: "path.json".into(),
+        json: json.into(),
+    };
+    let want = &file.parse(1, 1e9).unwrap().sample(30.0, 54 * 30)[0][30 * 30..];
+    let made = holistic(
+        7,
+        Edit {
+            path: Some(file),
+            ..Edit::default()
+        },
+    );
+    let m = &made.body;
+    let (mut sum, mut n) = (0.0, 0);
+    for (f, p) in want.iter().enumerate() {
+        if let Some([x, z]) = *p {
+            sum += (f64::from(m.trans[f * 3]) - x).hypot(f64::from(m.trans[f * 3 + 2]) - z);
+            n += 1;
+        }
+    }
+    let mean = sum / n as f64;
+    let step = (1..m.frames())
+        .map(|f| {
+            let d = |c: usize| f64::from(m.trans[f * 3 + c] - m.trans[(f - 1) * 3 + c]);
+            d(0).hypot(d(2))
+        })
+        .fold(0.0, f64::max);
+    let (jerk_p, jerk_b) = (jerk(m), jerk(&base().body));
+    eprintln!(
+        "holistic path: {n} frames, mean distance {mean:.4} m; largest root step {step:.3} m; \
+         jerk {jerk_p:.0} against the plain dance's {jerk_b:.0}"
+    );
+    assert!(n > 400 && mean <= 0.1, "the path is missed by {mean:.3} m");
+    assert!(step <= 0.25, "a root step of {step:.3} m in a frame");
+    assert!(
+        jerk_p <= 1.5 * jerk_b,
+        "jerk {jerk_p:.0} against {jerk_b:.0}"
+    );
 }

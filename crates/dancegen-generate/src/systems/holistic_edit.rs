@@ -16,8 +16,17 @@
 //! foot lock on the new parts), the fingers and face cross-fade from the kept frames over
 //! [`PART_BLEND_FRAMES`], and every kept value is spliced back exactly.
 //!
-//! Kept joints, keyframes and a path are not applied: SoulNet's tokens stand for a whole part
-//! over 4 frames, and a joint or a single frame has no token of its own.
+//! Kept joints (`--keep-joints`), keyframes and a path are known on some joints or the root of
+//! a frame only. SoulNet's tokens stand for a whole part over 4 frames, and a joint or a single
+//! frame has no token of its own, so those frames are made by the masked transformer as new
+//! ones and the partly known values are applied to the decoded body (a deviation from the
+//! solo and group systems, whose samplers take them as cues): the new part is turned and moved
+//! about the vertical onto the first keyed root orientation and floor position where no kept
+//! frame anchors it, then [`join_made_runs`] eases it into the known joints and root height
+//! (the difference at each known frame added around it, fading out over
+//! `dancegen_lodgepp::inpaint::EASE_FRAMES`; replacement on every frame of kept joints), moves
+//! its root onto the known floor positions (a path), and locks its planted feet without moving
+//! a known root. The fingers and face are SoulNet's, made with its own body.
 
 use dancegen_lodgepp::inpaint::{FootLock, KnownFrames, join_made_runs};
 use dancegen_lodgepp::planted_feet::PlantedRule;
@@ -108,7 +117,7 @@ pub(super) fn edit(
     let mut new_face = decoded.face[..t * ARKIT_COUNT].to_vec();
     let runs = made_runs(&part_known);
     for &(a, b) in &runs {
-        align_run(&mut hol.poses, &mut hol.trans, &known.motion, a, b, t);
+        align_run(&mut hol.poses, &mut hol.trans, &known, a, b);
     }
     // The body: joined and locked as a solo edit's new parts, the kept values exact.
     let body = SmplMotion {
@@ -299,29 +308,40 @@ fn heading(axis_angle: &[f32]) -> f64 {
     v[0].atan2(v[2])
 }
 
-/// Turns and moves the new frames `[a, b)` of the decoded dance about the vertical so that the
-/// frame next to them (the kept one before, else the one after) has the kept dance's heading
-/// and floor position.
-fn align_run(
-    poses: &mut [f32],
-    trans: &mut [f32],
-    kept: &SmplMotion,
-    a: usize,
-    b: usize,
-    t: usize,
-) {
-    let anchor = if a > 0 {
-        a - 1
-    } else if b < t {
-        b
-    } else {
-        return;
-    };
-    let turn = heading(&kept.poses[anchor * POSE_DIMS..anchor * POSE_DIMS + 3])
-        - heading(&poses[anchor * H_DIMS..anchor * H_DIMS + 3]);
+/// The frames whose known values a new part `[a, b)` is turned and moved onto: the kept
+/// frame next to it (before it, else after it) for both, or, for a part with no kept frame
+/// next to it (a dance made whole around kept joints, keyframes or a path), the first frame
+/// in it whose root orientation is known and the first whose floor position is.
+fn run_anchors(known: &KnownParts, a: usize, b: usize) -> (Option<usize>, Option<usize>) {
+    let t = known.frames();
+    if a > 0 {
+        return (Some(a - 1), Some(a - 1));
+    }
+    if b < t {
+        return (Some(b), Some(b));
+    }
+    let heading = (a..b).find(|&f| known.joints[f] & 1 != 0);
+    let floor = (a..b).find(|&f| known.root_horizontal[f]);
+    (heading, floor)
+}
+
+/// Turns and moves the new frames `[a, b)` of the decoded dance about the vertical so that
+/// their anchors ([`run_anchors`]) have the known dance's heading and floor position (the
+/// turn is about the floor-position anchor, the run's first frame without one).
+fn align_run(poses: &mut [f32], trans: &mut [f32], known: &KnownParts, a: usize, b: usize) {
+    let (turn_at, move_at) = run_anchors(known, a, b);
+    let kept = &known.motion;
+    let turn = turn_at.map_or(0.0, |f| {
+        heading(&kept.poses[f * POSE_DIMS..f * POSE_DIMS + 3])
+            - heading(&poses[f * H_DIMS..f * H_DIMS + 3])
+    });
+    let pivot = move_at.unwrap_or(a);
     let yaw = Quat::from_axis_angle([0.0, turn, 0.0]);
-    let from = [trans[anchor * 3], trans[anchor * 3 + 2]];
-    let to = [kept.trans[anchor * 3], kept.trans[anchor * 3 + 2]];
+    let from = [trans[pivot * 3], trans[pivot * 3 + 2]];
+    let to = match move_at {
+        Some(f) => [kept.trans[f * 3], kept.trans[f * 3 + 2]],
+        None => from,
+    };
     for f in a..b {
         let r = &mut poses[f * H_DIMS..f * H_DIMS + 3];
         let q = yaw * Quat::from_axis_angle([0, 1, 2].map(|i| f64::from(r[i])));
