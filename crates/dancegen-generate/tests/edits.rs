@@ -7,13 +7,12 @@ mod edit_common;
 
 use std::sync::OnceLock;
 
-use edit_common::{REAL_POSE_SPREAD_M, generator, joints, shared};
+use edit_common::{REAL_POSE_SPREAD_M, assert_on_the_beat, generator, joints, shared};
 
 use dancegen_generate::edit::{Edit, GivenMotion, KeyframePose};
 use dancegen_generate::formation_file::FormationFile;
 use dancegen_generate::request::CommonOptions;
 use dancegen_generate::{CancelToken, Request, Song, SystemRequest};
-use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, motion_beats};
 use dancegen_metrics::edit::{EditQuality, edit_quality};
 use dancegen_motion::repr::SmplMotion;
 
@@ -53,17 +52,6 @@ fn run(req: &Request) -> (SmplMotion, Vec<usize>) {
 fn base() -> &'static (SmplMotion, Vec<usize>) {
     static B: OnceLock<(SmplMotion, Vec<usize>)> = OnceLock::new();
     B.get_or_init(|| run(&solo(0, 60.0, Some(89.0), Edit::default())))
-}
-
-fn bas(j: &[f64], beats: &[usize]) -> f64 {
-    let frames = j.len() / 72;
-    let music = clip_music_beats(beats, frames, Variant::Bailando);
-    beat_align_score(
-        &music,
-        &motion_beats(j, Variant::Bailando),
-        Variant::Bailando,
-    )
-    .unwrap()
 }
 
 /// The bound on the boundary-jerk ratio at the joins.
@@ -156,19 +144,8 @@ fn a_regenerated_range_is_new_on_the_beat_and_joins_the_kept_frames() {
         "the new part differs by {:.3} m only",
         q.new_difference_m
     );
-    let whole = bas(&je, beats);
-    let r = &made[0];
-    let in_range: Vec<usize> = beats
-        .iter()
-        .filter(|&&b| r.contains(&b))
-        .map(|&b| b - r.start)
-        .collect();
-    let part = bas(&je[r.start * 72..r.end * 72], &in_range);
+    let (whole, part) = assert_on_the_beat(&je, beats, &made[0], "the edit");
     eprintln!("BAS whole {whole:.3}, regenerated {part:.3}");
-    assert!(
-        part >= whole - 0.05,
-        "BAS {part:.3} in the new part, {whole:.3} overall"
-    );
 }
 
 #[test]

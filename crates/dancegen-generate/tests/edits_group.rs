@@ -7,7 +7,7 @@ mod edit_common;
 
 use std::sync::OnceLock;
 
-use edit_common::{REAL_POSE_SPREAD_M, assert_joins, generator, joints, shared};
+use edit_common::{REAL_POSE_SPREAD_M, assert_joins, feelings_beats, generator, joints, shared};
 
 use dancegen_generate::edit::{Edit, GivenMotion, KeepJoints, parse_joint_set};
 use dancegen_generate::request::CommonOptions;
@@ -82,6 +82,7 @@ fn a_regenerated_range_is_new_for_every_dancer_and_joins_the_kept_frames() {
     let edited = group(3, edit);
     let made = 240..420;
     let other = group(3, Edit::default());
+    let beats = feelings_beats(30.0, 54.0);
     for (k, (e, o)) in edited.iter().zip(original).enumerate() {
         assert_eq!(e.frames(), o.frames());
         assert_kept(e, o, (0..e.frames()).filter(|f| !made.contains(f)));
@@ -90,7 +91,19 @@ fn a_regenerated_range_is_new_for_every_dancer_and_joins_the_kept_frames() {
         let seeds = edit_quality(&jo, &joints(&other[k]), std::slice::from_ref(&made), 30.0)
             .unwrap()
             .new_difference_m;
-        eprintln!("group regenerate, dancer {k}: {q:?}; another seed differs by {seeds:.3} m");
+        eprintln!(
+            "dancer {k}: BAS in the range: the original {:.3}, another seed's plain dance {:.3}",
+            edit_common::bas_of_range(&jo, &beats, &made),
+            edit_common::bas_of_range(&joints(&other[k]), &beats, &made)
+        );
+        let (whole, part) = (
+            edit_common::bas(&je, &beats),
+            edit_common::bas_of_range(&je, &beats, &made),
+        );
+        eprintln!(
+            "group regenerate, dancer {k}: {q:?}; another seed differs by {seeds:.3} m; BAS \
+             {part:.3} in the new part, {whole:.3} overall"
+        );
         assert!(q.kept_max_m <= 1e-4, "{q:?}");
         assert_joins(&q, &format!("dancer {k}"));
         assert!(
@@ -232,4 +245,50 @@ fn every_dancer_reaches_a_keyframe_where_it_stands() {
         spread > 0.5,
         "the dancers' x at the keyframe span {spread:.2} m"
     );
+}
+
+/// New parts are on the beat: for every dancer, the mean BAS of 8-14 s regenerated with seeds
+/// 1-5 is at least the mean BAS of those whole edited dances − 0.05 (the issue's bound, on the
+/// mean over seeds: one 6 s range is a lottery of its few beats). The same range of plain
+/// dances of those seeds is reported beside it.
+#[test]
+#[ignore = "unmet (issue 44; the group model's collapse, issue 43): over seeds 1-5 the new \
+            parts of dancers 1 and 2 have a mean BAS of 0.058 and 0.013 against 0.209 and \
+            0.156 for the whole dances, nearly the same for every seed"]
+fn new_parts_are_on_the_beat_over_seeds() {
+    let original = base();
+    let beats = feelings_beats(30.0, 54.0);
+    let made = 240..420;
+    let mut plain = vec![Vec::new(); DANCERS];
+    let mut part = vec![Vec::new(); DANCERS];
+    let mut whole = vec![Vec::new(); DANCERS];
+    for seed in 1..=5 {
+        let p = group(seed, Edit::default());
+        let e = group(
+            seed,
+            Edit {
+                base: Some(given(original)),
+                regenerate: vec![[8.0, 14.0]],
+                ..Edit::default()
+            },
+        );
+        for k in 0..DANCERS {
+            plain[k].push(edit_common::bas_of_range(&joints(&p[k]), &beats, &made));
+            let j = joints(&e[k]);
+            part[k].push(edit_common::bas_of_range(&j, &beats, &made));
+            whole[k].push(edit_common::bas(&j, &beats));
+        }
+    }
+    let missed: Vec<String> = (0..DANCERS)
+        .filter_map(|k| {
+            edit_common::on_the_beat_over_seeds(
+                &part[k],
+                &whole[k],
+                &plain[k],
+                &format!("group dancer {k}"),
+            )
+            .err()
+        })
+        .collect();
+    assert!(missed.is_empty(), "{}", missed.join("; "));
 }

@@ -56,3 +56,83 @@ pub fn assert_joins(q: &dancegen_metrics::edit::EditQuality, what: &str) {
         q.other_root_step_m
     );
 }
+
+/// The beats (frames from `start`, 30 fps) of the held-out song `feelings.ogg` between
+/// `start` and `end` seconds, as the generator finds them.
+#[allow(dead_code)]
+pub fn feelings_beats(start: f64, end: f64) -> Vec<usize> {
+    let song = dancegen_generate::song::AnalysedSong::analyse(&dancegen_generate::Song::File(
+        shared().join("data/music/sectoid/feelings.ogg"),
+    ))
+    .unwrap();
+    song.beat_frames(&song.span(Some(start), Some(end)).unwrap())
+}
+
+/// Bailando's beat-align score of world joints `j` (`(T, 24, 3)`) against music beats (frames).
+#[allow(dead_code)]
+pub fn bas(j: &[f64], beats: &[usize]) -> f64 {
+    use dancegen_metrics::bas::{Variant, beat_align_score, clip_music_beats, motion_beats};
+    let frames = j.len() / 72;
+    let music = clip_music_beats(beats, frames, Variant::Bailando);
+    beat_align_score(
+        &music,
+        &motion_beats(j, Variant::Bailando),
+        Variant::Bailando,
+    )
+    .unwrap()
+}
+
+/// The BAS of the frames `range` of world joints `j` alone, against the beats inside it.
+#[allow(dead_code)]
+pub fn bas_of_range(j: &[f64], beats: &[usize], range: &std::ops::Range<usize>) -> f64 {
+    let inside: Vec<usize> = beats
+        .iter()
+        .filter(|&&b| range.contains(&b))
+        .map(|&b| b - range.start)
+        .collect();
+    bas(&j[range.start * 72..range.end * 72], &inside)
+}
+
+/// The issue's beat bound on a regenerated range `made` of world joints `j`: its BAS (the
+/// range alone, against the beats inside it) is at least the whole dance's − 0.05. Returns
+/// both, for the report.
+#[allow(dead_code)]
+pub fn assert_on_the_beat(
+    j: &[f64],
+    beats: &[usize],
+    made: &std::ops::Range<usize>,
+    what: &str,
+) -> (f64, f64) {
+    let whole = bas(j, beats);
+    let part = bas_of_range(j, beats, made);
+    assert!(
+        part >= whole - 0.05,
+        "{what}: BAS {part:.3} in the new part, {whole:.3} overall"
+    );
+    (whole, part)
+}
+
+/// The issue's beat bound on the mean over seeds: the new parts' BAS (`part`, one per seed)
+/// at least the whole edited dances' (`whole`) − 0.05; `plain` (the same range of plain
+/// dances of those seeds) is reported beside them. `Err` says by how much it is missed.
+#[allow(dead_code)]
+pub fn on_the_beat_over_seeds(
+    part: &[f64],
+    whole: &[f64],
+    plain: &[f64],
+    what: &str,
+) -> Result<(), String> {
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (p, w, q) = (mean(part), mean(whole), mean(plain));
+    eprintln!(
+        "{what}: BAS of the new parts {part:.3?} (mean {p:.3}), of the whole edited dances \
+         mean {w:.3}, of the same range of plain dances {plain:.3?} (mean {q:.3})"
+    );
+    if p >= w - 0.05 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what}: mean BAS {p:.3} in the new parts, {w:.3} for the whole dances"
+        ))
+    }
+}
