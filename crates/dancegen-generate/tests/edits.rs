@@ -283,11 +283,10 @@ fn kept_legs_and_root_stay_and_the_upper_body_is_new() {
         }
     }
     let d = d / (4 * new.frames()) as f64;
-    let jerk = |j: &[f64]| {
-        let v = dancegen_metrics::longform::mean_joint_jerk(j, 30.0).unwrap();
-        v.iter().sum::<f64>() / v.len() as f64
-    };
-    let (jerk_o, jerk_n) = (jerk(&jo), jerk(&jn));
+    let (jerk_o, jerk_n) = (
+        edit_common::mean_jerk(original),
+        edit_common::mean_jerk(&new),
+    );
     eprintln!(
         "kept lower: hands {d:.3} m from the original's; jerk {jerk_n:.0} against {jerk_o:.0}"
     );
@@ -411,35 +410,7 @@ fn a_path_is_followed_and_the_dance_on_it_stays_whole() {
         ..Edit::default()
     };
     let (made, _) = run(&solo(6, 60.0, Some(89.0), edit));
-    let (mut sum, mut n) = (0.0, 0);
-    for (f, p) in want.iter().enumerate() {
-        if let Some([x, z]) = *p {
-            sum += (f64::from(made.trans[f * 3]) - x).hypot(f64::from(made.trans[f * 3 + 2]) - z);
-            n += 1;
-        }
-    }
-    let mean = sum / n as f64;
-    let step = (1..made.frames())
-        .map(|f| {
-            let d = |c: usize| f64::from(made.trans[f * 3 + c] - made.trans[(f - 1) * 3 + c]);
-            d(0).hypot(d(2))
-        })
-        .fold(0.0, f64::max);
-    let jerk = |m: &SmplMotion| {
-        let v = dancegen_metrics::longform::mean_joint_jerk(&joints(m), 30.0).unwrap();
-        v.iter().sum::<f64>() / v.len() as f64
-    };
-    let (jerk_p, jerk_b) = (jerk(&made), jerk(&base().0));
-    eprintln!(
-        "path: {n} frames, mean distance {mean:.4} m; largest root step {step:.3} m; jerk \
-         {jerk_p:.0} against the plain dance's {jerk_b:.0}"
-    );
-    assert!(n > 400 && mean <= 0.1, "the path is missed by {mean:.3} m");
-    assert!(step <= 0.25, "a root step of {step:.3} m in a frame");
-    assert!(
-        jerk_p <= 1.5 * jerk_b,
-        "jerk {jerk_p:.0} against {jerk_b:.0}"
-    );
+    edit_common::assert_path_followed(&made, want, &base().0, "path");
 }
 
 /// `--edit --extend`: the 29 s base dance kept whole, then danced on to 95 s of the song.

@@ -6,7 +6,9 @@ mod edit_common;
 
 use std::sync::OnceLock;
 
-use edit_common::{REAL_POSE_SPREAD_M, assert_joins, feelings_beats, generator, joints, shared};
+use edit_common::{
+    REAL_POSE_SPREAD_M, assert_joins, feelings_beats, generator, joints, mean_jerk, shared,
+};
 
 use dancegen_generate::edit::{
     Edit, GivenMotion, HolisticGiven, KeepJoints, KeyframePose, parse_joint_set,
@@ -184,12 +186,6 @@ fn a_continued_dance_starts_with_the_last_second_fingers_and_face_included() {
     assert_joins(&q, "the edit");
 }
 
-/// Mean joint jerk (m/s³) of a body, for comparing an edit with the plain dance.
-fn jerk(m: &SmplMotion) -> f64 {
-    let v = dancegen_metrics::longform::mean_joint_jerk(&joints(m), 30.0).unwrap();
-    v.iter().sum::<f64>() / v.len() as f64
-}
-
 #[test]
 fn kept_legs_and_root_stay_and_the_rest_is_new_fingers_and_face_included() {
     let original = base();
@@ -246,7 +242,7 @@ fn kept_legs_and_root_stay_and_the_rest_is_new_fingers_and_face_included() {
         .map(|i| f64::from((made.poses[i] - original.poses[i]).abs()))
         .sum::<f64>()
         / (t * 90) as f64;
-    let (jerk_m, jerk_o) = (jerk(&made.body), jerk(&original.body));
+    let (jerk_m, jerk_o) = (mean_jerk(&made.body), mean_jerk(&original.body));
     eprintln!(
         "holistic kept lower: wrists {d:.3} m from the original's, fingers {fingers:.3} rad; \
          jerk {jerk_m:.0} against {jerk_o:.0}"
@@ -295,8 +291,8 @@ fn a_keyframe_pose_is_reached_in_world_space_and_eased_into() {
     eprintln!(
         "holistic keyframe: worst joint {worst:.4} m from the pose; {q:?}; jerk {:.0} against \
          {:.0}",
-        jerk(&made.body),
-        jerk(&original.body)
+        mean_jerk(&made.body),
+        mean_jerk(&original.body)
     );
     assert!(
         worst <= 0.03,
@@ -323,32 +319,7 @@ fn a_path_is_followed_and_the_dance_on_it_stays_whole() {
             ..Edit::default()
         },
     );
-    let m = &made.body;
-    let (mut sum, mut n) = (0.0, 0);
-    for (f, p) in want.iter().enumerate() {
-        if let Some([x, z]) = *p {
-            sum += (f64::from(m.trans[f * 3]) - x).hypot(f64::from(m.trans[f * 3 + 2]) - z);
-            n += 1;
-        }
-    }
-    let mean = sum / n as f64;
-    let step = (1..m.frames())
-        .map(|f| {
-            let d = |c: usize| f64::from(m.trans[f * 3 + c] - m.trans[(f - 1) * 3 + c]);
-            d(0).hypot(d(2))
-        })
-        .fold(0.0, f64::max);
-    let (jerk_p, jerk_b) = (jerk(m), jerk(&base().body));
-    eprintln!(
-        "holistic path: {n} frames, mean distance {mean:.4} m; largest root step {step:.3} m; \
-         jerk {jerk_p:.0} against the plain dance's {jerk_b:.0}"
-    );
-    assert!(n > 400 && mean <= 0.1, "the path is missed by {mean:.3} m");
-    assert!(step <= 0.25, "a root step of {step:.3} m in a frame");
-    assert!(
-        jerk_p <= 1.5 * jerk_b,
-        "jerk {jerk_p:.0} against {jerk_b:.0}"
-    );
+    edit_common::assert_path_followed(&made.body, want, &base().body, "holistic path");
 }
 
 /// New parts are on the beat: the mean BAS of 8-14 s regenerated with seeds 1-5 is at least

@@ -136,3 +136,54 @@ pub fn on_the_beat_over_seeds(
         ))
     }
 }
+
+/// Mean joint jerk (m/s³) of a motion's world joints at 30 fps.
+#[allow(dead_code)]
+pub fn mean_jerk(m: &SmplMotion) -> f64 {
+    let v = dancegen_metrics::longform::mean_joint_jerk(&joints(m), 30.0).unwrap();
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// The issue's path bounds on a dance `m` made along `want` (the path's floor position per
+/// frame of the dance, `None` where it is free): followed within 0.1 m on average over more
+/// than 400 frames, no root step over 0.25 m in a frame, and jerk at most 1.5 times the plain
+/// dance's (`plain`). `what` names the dance in the report.
+#[allow(dead_code)]
+pub fn assert_path_followed(
+    m: &SmplMotion,
+    want: &[Option<[f64; 2]>],
+    plain: &SmplMotion,
+    what: &str,
+) {
+    let (mut sum, mut n) = (0.0, 0);
+    for (f, p) in want.iter().enumerate() {
+        if let Some([x, z]) = *p {
+            sum += (f64::from(m.trans[f * 3]) - x).hypot(f64::from(m.trans[f * 3 + 2]) - z);
+            n += 1;
+        }
+    }
+    let mean = sum / n.max(1) as f64;
+    let step = (1..m.frames())
+        .map(|f| {
+            let d = |c: usize| f64::from(m.trans[f * 3 + c] - m.trans[(f - 1) * 3 + c]);
+            d(0).hypot(d(2))
+        })
+        .fold(0.0, f64::max);
+    let (jerk_p, jerk_b) = (mean_jerk(m), mean_jerk(plain));
+    eprintln!(
+        "{what}: {n} frames, mean distance {mean:.4} m; largest root step {step:.3} m; jerk \
+         {jerk_p:.0} against the plain dance's {jerk_b:.0}"
+    );
+    assert!(
+        n > 400 && mean <= 0.1,
+        "{what}: the path is missed by {mean:.3} m"
+    );
+    assert!(
+        step <= 0.25,
+        "{what}: a root step of {step:.3} m in a frame"
+    );
+    assert!(
+        jerk_p <= 1.5 * jerk_b,
+        "{what}: jerk {jerk_p:.0} against {jerk_b:.0}"
+    );
+}
