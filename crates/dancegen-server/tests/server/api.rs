@@ -497,3 +497,62 @@ fn a_group_edit_keeps_every_dancer_outside_its_range() {
         );
     }
 }
+
+#[test]
+fn a_holistic_edit_keeps_the_arms_it_is_asked_to_keep() {
+    let s = start(Limits::default());
+    let r = s.submit_song(
+        &demo_song(),
+        r#"{"system": "holistic", "seed": 1, "end": 10}"#,
+    );
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+
+    let params = format!(
+        r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]], "keep": "arms"}}}}"#
+    );
+    let r = s.submit(&[("params", None, params.as_bytes())]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let eid = r.json["id"].as_str().unwrap().to_string();
+    let edited = s.wait(&eid, JOB_TIMEOUT);
+    assert_eq!(edited["state"], "done", "{edited}");
+    assert_eq!(edited["params"]["system"], "holistic");
+    // The SMPL-H rotations (T, 156) of the .npz each job serves.
+    let poses = |job: &Value| {
+        let bytes = s.download(job["variations"][0]["files"]["npz"].as_str().unwrap());
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("dance.npz");
+        std::fs::write(&path, bytes).unwrap();
+        let m = dancegen_io::npz::read_npz_members(&path, &["poses"]).unwrap();
+        m[0].1.data.clone()
+    };
+    let (old, new) = (poses(&job), poses(&edited));
+    assert_eq!(old.len(), new.len());
+    let frames = old.len() / 156;
+    assert_eq!(frames, 300);
+    let arms = [13, 14, 16, 17, 18, 19, 20, 21];
+    for f in 0..frames {
+        let kept = !(90..180).contains(&f);
+        for j in 0..52 {
+            if kept || arms.contains(&j) {
+                for i in f * 156 + 3 * j..f * 156 + 3 * j + 3 {
+                    assert!(
+                        (old[i] - new[i]).abs() <= 1e-4,
+                        "frame {f}, joint {j} changed"
+                    );
+                }
+            }
+        }
+    }
+    let legs = (90..180)
+        .flat_map(|f| [1, 2, 4, 5].map(|j| f * 156 + 3 * j))
+        .flat_map(|at| at..at + 3)
+        .map(|i| (old[i] - new[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        legs > 0.02,
+        "the legs of the range are the old ones ({legs})"
+    );
+}
