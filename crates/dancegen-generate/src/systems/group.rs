@@ -42,14 +42,7 @@ impl DanceSystem for Group {
     const MODEL_KIND: &'static str = dancegen_tcdiffpp::bundle::KIND;
     const DEFAULT_MODEL: &'static str = "tcdiffpp-small";
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
-    const EDITS: &'static [&'static str] = &[
-        edit::REGENERATE,
-        edit::EXTEND,
-        edit::CONTINUE,
-        edit::KEEP_JOINTS,
-        edit::KEYFRAME,
-        edit::PATH,
-    ];
+    const EDITS: &'static [&'static str] = &edit::OPERATIONS;
 
     type Model = GroupModel;
     type Options = GroupOptions;

@@ -30,14 +30,7 @@ impl DanceSystem for Holistic {
     const MODEL_KIND: &'static str = dancegen_soulnet::bundle::KIND;
     const DEFAULT_MODEL: &'static str = "soulnet-small";
     const PARTS: &'static [(&'static str, f64)] = &[(TOKENS, 1.0)];
-    const EDITS: &'static [&'static str] = &[
-        edit::REGENERATE,
-        edit::EXTEND,
-        edit::CONTINUE,
-        edit::KEEP_JOINTS,
-        edit::KEYFRAME,
-        edit::PATH,
-    ];
+    const EDITS: &'static [&'static str] = &edit::OPERATIONS;
 
     type Model = HolisticModel;
     type Options = HolisticOptions;

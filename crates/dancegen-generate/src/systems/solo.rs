@@ -69,14 +69,7 @@ impl DanceSystem for Solo {
     const DEFAULT_MODEL: &'static str = "lodgepp-small";
     // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
-    const EDITS: &'static [&'static str] = &[
-        edit::REGENERATE,
-        edit::EXTEND,
-        edit::CONTINUE,
-        edit::KEEP_JOINTS,
-        edit::KEYFRAME,
-        edit::PATH,
-    ];
+    const EDITS: &'static [&'static str] = &edit::OPERATIONS;
 
     type Model = SoloModel;
     type Options = SoloOptions;
