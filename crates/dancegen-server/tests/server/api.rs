@@ -553,6 +553,6 @@ fn a_holistic_edit_keeps_the_arms_it_is_asked_to_keep() {
         .fold(0.0, f64::max);
     assert!(
         legs > 0.02,
-        "the legs of the range are the old ones ({legs})"
+        "the legs of the range are the old ones (they moved {legs} rad at most)"
     );
 }
