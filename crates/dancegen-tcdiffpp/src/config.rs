@@ -63,8 +63,9 @@ pub struct DenoiserConfig {
     /// the noise the decoder reads cannot make the root jump between frames
     /// (docs/group-collapse.md §11).
     pub root_integrated: bool,
-    /// What the last layer predicts: x̂0 (the paper's) or `v` (our option, the
-    /// v-parameterisation with its skip from x_t; [`crate::prediction`]).
+    /// What the last layer predicts: x̂0 (the paper's), `v` (our option, the
+    /// v-parameterisation with its skip from x_t) or `x0_skip` (our option, x̂0 plus a learned
+    /// skip from x_t); [`crate::prediction`].
     pub prediction: Prediction,
 }
 

@@ -43,7 +43,7 @@ use crate::cross_mamba::CrossMambaLayer;
 use crate::footwork::FootworkAdaptor;
 use crate::fusion::FusionProjection;
 use crate::layout::{N_MAX, from_tokens, to_tokens, token_mask, token_padding};
-use crate::prediction::{Prediction, VelocitySkip};
+use crate::prediction::{Prediction, SkipGate, VelocitySkip};
 use crate::root_path::RootPath;
 use crate::swap::SwapEmbedding;
 use dancegen_nn::host_linear;
@@ -108,6 +108,8 @@ pub struct GroupDenoiser {
     /// The skip from x_t of [`crate::prediction::Prediction::Velocity`]; `None` predicts x̂0.
     #[module(skip)]
     pub velocity: Option<VelocitySkip>,
+    /// The learned skip of [`crate::prediction::Prediction::LearnedSkip`].
+    pub skip_gate: Option<SkipGate>,
 }
 
 impl DenoiserConfig {
@@ -157,6 +159,8 @@ impl DenoiserConfig {
             fusion_residual: self.fusion_residual,
             velocity: (self.prediction == Prediction::Velocity)
                 .then(|| VelocitySkip::new(self.root_integrated)),
+            skip_gate: (self.prediction == Prediction::LearnedSkip)
+                .then(|| SkipGate::new(4 * d, self.root_integrated, device)),
         }
     }
 }
@@ -260,9 +264,10 @@ impl GroupDenoiser {
                 fused
             };
         }
+        let time_features = self.time.forward(t, &device);
         let time = self
             .time_cond
-            .forward(self.time.forward(t, &device))
+            .forward(time_features.clone())
             .unsqueeze_dim::<3>(1);
         let self_masks = AttnMasks {
             attn: None,
@@ -291,9 +296,10 @@ impl GroupDenoiser {
             Some(fa) => fa.forward(raw),
             None => raw,
         };
-        let out = match &self.velocity {
-            Some(v) => v.apply(out, x_tokens, t),
-            None => out,
+        let out = match (&self.velocity, &self.skip_gate) {
+            (Some(v), _) => v.apply(out, x_tokens, t),
+            (None, Some(g)) => g.apply(out, x_tokens, time_features),
+            (None, None) => out,
         };
         from_tokens(out * mask)
     }

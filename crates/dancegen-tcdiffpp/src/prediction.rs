@@ -15,6 +15,13 @@
 //! Sign convention: the network outputs `−v̂`, so that at `t = T − 1` its output means x̂0 as
 //! an x0-predictor's does and a trained x0 network can warm-start this one.
 //!
+//! [`Prediction::LearnedSkip`] is our option too: x̂0 is the network's output plus `g(t) ⊙ x_t`,
+//! a per-channel gate of the noise level learned from the timestep features ([`SkipGate`]).
+//! It starts at zero, so a trained x0 network warm-starts it unchanged, and it learns from the
+//! data how much of the input to carry at each level: near 1 where the input is nearly clean
+//! (the copy the x0 network learned too slowly, docs/group-collapse.md §15), less in the
+//! middle, where v's fixed `√ᾱ` carried the noise into the dance (§12, §14).
+//!
 //! Channels the decoder already builds from its own path (the integrated root x/y,
 //! [`crate::root_path`]) take no skip: their per-frame noise is what that path keeps out.
 
@@ -22,6 +29,8 @@ use dancegen_nn::burn;
 use dancegen_nn::diffusion::Schedule;
 use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL};
 
+use burn::module::Module;
+use burn::nn::{Initializer, Linear, LinearConfig};
 use burn::tensor::{Device, Tensor, TensorData};
 use serde::{Deserialize, Serialize};
 
@@ -35,6 +44,46 @@ pub enum Prediction {
     /// Ours: the output is `−v̂`, `x̂0 = √ᾱ x_t + √(1 − ᾱ) · output`.
     #[serde(rename = "v")]
     Velocity,
+    /// Ours: x̂0 = output + `g(t) ⊙ x_t`, the gate learned ([`SkipGate`]).
+    #[serde(rename = "x0_skip")]
+    LearnedSkip,
+}
+
+/// The learned gate of [`Prediction::LearnedSkip`]: `Linear(time features → 151)`, zero at
+/// the start, masked off the channels that take no skip.
+#[derive(Module, Debug)]
+pub struct SkipGate {
+    pub gate: Linear,
+    /// 1 where a token channel takes the skip (not the integrated root x/y).
+    #[module(skip)]
+    skipped: Vec<f32>,
+}
+
+impl SkipGate {
+    /// `time_dims`: the width of the timestep features it reads.
+    pub fn new(time_dims: usize, root_integrated: bool, device: &Device) -> Self {
+        Self {
+            gate: LinearConfig::new(time_dims, DIMS)
+                .with_initializer(Initializer::Zeros)
+                .init(device),
+            skipped: (0..DIMS)
+                .map(|c| f32::from(u8::from(!(root_integrated && ROOT_HORIZONTAL.contains(&c)))))
+                .collect(),
+        }
+    }
+
+    /// x̂0 tokens `[B, K, 151]` from the output tokens, the input tokens `x_t` and the
+    /// timestep features `[B, time_dims]` of the batch.
+    pub fn apply(&self, out: Tensor<3>, x_t: Tensor<3>, time: Tensor<2>) -> Tensor<3> {
+        let [b, _, c] = out.dims();
+        debug_assert_eq!(c, DIMS);
+        let mask = Tensor::<3>::from_data(
+            TensorData::new(self.skipped.clone(), [1, 1, c]),
+            &out.device(),
+        );
+        let g = self.gate.forward(time).reshape([b, 1, c]) * mask;
+        out + x_t * g
+    }
 }
 
 /// The skip coefficients of [`Prediction::Velocity`] for the model's schedule.
@@ -114,6 +163,32 @@ mod tests {
                 -1.0
             };
             assert!((v - want).abs() < 0.05, "channel {c}: {v} against {want}");
+        }
+    }
+
+    #[test]
+    fn a_fresh_gate_is_the_x0_network_and_the_integrated_root_takes_no_skip() {
+        let dev = dancegen_nn::device::inference();
+        let out = tensor(vec![2.0; 2 * DIMS], [2, 1, DIMS]);
+        let x_t = tensor(vec![-1.0; 2 * DIMS], [2, 1, DIMS]);
+        let time = Tensor::<2>::ones([2, 8], &dev);
+        let fresh = SkipGate::new(8, true, &dev);
+        assert!(
+            host(fresh.apply(out.clone(), x_t.clone(), time.clone()))
+                .iter()
+                .all(|&v| v == 2.0)
+        );
+        // A gate of 1 everywhere (bias 1): x̂0 = output + x_t, except the integrated root.
+        let mut open = SkipGate::new(8, true, &dev);
+        open.gate.bias = Some(burn::module::Param::from_tensor(Tensor::ones([DIMS], &dev)));
+        let got = host(open.apply(out, x_t, time));
+        for (i, &v) in got.iter().enumerate() {
+            let want = if ROOT_HORIZONTAL.contains(&(i % DIMS)) {
+                2.0
+            } else {
+                1.0
+            };
+            assert_eq!(v, want, "channel {}", i % DIMS);
         }
     }
 

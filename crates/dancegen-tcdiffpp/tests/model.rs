@@ -13,6 +13,7 @@ use dancegen_tcdiffpp::denoiser::{GroupCond, GroupDenoiser, MUSIC_DIMS, Prepared
 use dancegen_tcdiffpp::footwork::lower_body_channels;
 use dancegen_tcdiffpp::layout::{GROUP_DIMS, N_MAX, channel};
 use dancegen_tcdiffpp::losses::{GroupBatch, distance_consistency, group_loss, root_velocity};
+use dancegen_tcdiffpp::prediction::Prediction;
 use dancegen_tcdiffpp::sampler::{GroupRequest, GroupSampleOptions, RootXy, generate};
 use dancegen_tcdiffpp::swap::identity_code;
 
@@ -366,6 +367,60 @@ fn the_objective_is_learnable() {
     }
     let after = mean_of(&m, 1000..1008);
     assert!(after < 0.7 * before, "loss {before} → {after}");
+}
+
+/// Mean squared x̂0 error over the active channels after `steps` AdamW steps taught only at
+/// `t = 10` (a nearly clean input) on fresh random windows, then on new windows.
+fn copy_error_after(prediction: Prediction, steps: usize) -> f32 {
+    let dev = device::training();
+    let cfg = DenoiserConfig {
+        prediction,
+        ..tiny(SequenceMixer::CrossAttention)
+    };
+    let mut m = net(&cfg, &dev);
+    let mut optim = AdamWConfig::new().init();
+    let schedule = Schedule::edge();
+    let (b, n, level) = (4, 3, 10);
+    let mask = {
+        let v: Vec<f32> = (0..GROUP_DIMS)
+            .map(|c| f32::from(u8::from(c < n * DIMS)))
+            .collect();
+        Tensor::<3>::from_data(TensorData::new(v, [1, 1, GROUP_DIMS]), &dev)
+    };
+    let error = |m: &GroupDenoiser| {
+        let x0 = Tensor::<3>::random([b, T, GROUP_DIMS], Distribution::Normal(0.0, 0.5), &dev)
+            * mask.clone();
+        let noise = Tensor::<3>::random([b, T, GROUP_DIMS], Distribution::Normal(0.0, 1.0), &dev);
+        let x_t = schedule.q_sample(x0.clone(), &vec![level; b], noise) * mask.clone();
+        let pred = m.forward(
+            x_t,
+            &vec![level as f32; b],
+            &cond(b, T, n, &dev),
+            &vec![true; b],
+        );
+        (pred * mask.clone() - x0).powf_scalar(2.0).sum() / (b * T * n * DIMS) as f64
+    };
+    for _ in 0..steps {
+        let l = error(&m);
+        let grads = GradientsParams::from_grads(l.backward(), &m);
+        m = optim.step(1e-3, m, grads);
+    }
+    (0..4).map(|_| error(&m).into_scalar::<f32>()).sum::<f32>() / 4.0
+}
+
+#[test]
+fn the_learned_skip_copies_a_nearly_clean_input_that_the_x0_network_cannot() {
+    // Random windows fill all 151 channels of a token; the tiny network is 32 wide, so an x0
+    // network can pass at most 32 of them through (error near 0.25 · 119/151 ≈ 0.2), while
+    // the learned skip carries the input past the width (docs/group-collapse.md §15).
+    let x0 = copy_error_after(Prediction::X0, 150);
+    let skip = copy_error_after(Prediction::LearnedSkip, 150);
+    eprintln!("copy error: x0 network {x0}, learned skip {skip}");
+    assert!(
+        x0 > 0.15,
+        "x0 network error {x0}: the width no longer limits it?"
+    );
+    assert!(skip < 0.05, "learned skip error {skip} (x0 network: {x0})");
 }
 
 fn request_paths(frames: usize, n: usize) -> Vec<Option<RootXy>> {
