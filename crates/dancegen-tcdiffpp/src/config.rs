@@ -67,6 +67,9 @@ pub struct DenoiserConfig {
     /// v-parameterisation with its skip from x_t) or `x0_skip` (our option, x̂0 plus a learned
     /// skip from x_t); [`crate::prediction`].
     pub prediction: Prediction,
+    /// With `prediction = "x0_skip"`: the widths (Gaussian σ, frames) of the smoothings of x_t
+    /// the learned skip mixes; 0 is x_t itself ([`crate::prediction::SkipGate`]).
+    pub skip_smoothing: Vec<f64>,
 }
 
 impl Default for DenoiserConfig {
@@ -89,6 +92,7 @@ impl Default for DenoiserConfig {
             footwork_residual: false,
             root_integrated: false,
             prediction: Prediction::X0,
+            skip_smoothing: vec![0.0],
         }
     }
 }

@@ -160,7 +160,7 @@ impl DenoiserConfig {
             velocity: (self.prediction == Prediction::Velocity)
                 .then(|| VelocitySkip::new(self.root_integrated)),
             skip_gate: (self.prediction == Prediction::LearnedSkip)
-                .then(|| SkipGate::new(4 * d, self.root_integrated, device)),
+                .then(|| SkipGate::new(4 * d, self.root_integrated, &self.skip_smoothing, device)),
         }
     }
 }

@@ -49,41 +49,87 @@ pub enum Prediction {
     LearnedSkip,
 }
 
-/// The learned gate of [`Prediction::LearnedSkip`]: `Linear(time features → 151)`, zero at
-/// the start, masked off the channels that take no skip.
+/// The learned gate of [`Prediction::LearnedSkip`]: x̂0 = output + `Σ_k g_k(t) ⊙ (G_k ∗ x_t)`,
+/// where `G_k` smooths each channel along the window's frames with a Gaussian of `σ_k` frames
+/// (`σ = 0`: the input itself) and `g_k = Linear(time features → 151)`, zero at the start,
+/// masked off the channels that take no skip.
+///
+/// Why a bank of smoothings: a per-channel scalar gate cannot tell the motion from the noise,
+/// which have the same channels; it passes both, and the noise became jitter (v11,
+/// docs/group-collapse.md §17). The motion is smooth over frames and the noise is not, so the
+/// best linear estimate of x0 from x_t is a low-pass filter whose width grows with the noise
+/// level. A learned mix of a few fixed widths lets the gate approach it.
 #[derive(Module, Debug)]
 pub struct SkipGate {
     pub gate: Linear,
     /// 1 where a token channel takes the skip (not the integrated root x/y).
     #[module(skip)]
     skipped: Vec<f32>,
+    /// `σ_k` in frames.
+    #[module(skip)]
+    sigmas: Vec<f64>,
 }
 
 impl SkipGate {
-    /// `time_dims`: the width of the timestep features it reads.
-    pub fn new(time_dims: usize, root_integrated: bool, device: &Device) -> Self {
+    /// `time_dims`: the width of the timestep features it reads; `sigmas`: the smoothing
+    /// widths in frames (at least one).
+    pub fn new(time_dims: usize, root_integrated: bool, sigmas: &[f64], device: &Device) -> Self {
+        assert!(!sigmas.is_empty(), "a skip needs at least one smoothing width");
         Self {
-            gate: LinearConfig::new(time_dims, DIMS)
+            gate: LinearConfig::new(time_dims, sigmas.len() * DIMS)
                 .with_initializer(Initializer::Zeros)
                 .init(device),
             skipped: (0..DIMS)
                 .map(|c| f32::from(u8::from(!(root_integrated && ROOT_HORIZONTAL.contains(&c)))))
                 .collect(),
+            sigmas: sigmas.to_vec(),
         }
     }
 
-    /// x̂0 tokens `[B, K, 151]` from the output tokens, the input tokens `x_t` and the
-    /// timestep features `[B, time_dims]` of the batch.
+    /// x̂0 tokens `[B, T·N, 151]` from the output tokens, the input tokens `x_t` (frame-major,
+    /// [`crate::layout`]) and the timestep features `[B, time_dims]` of the batch.
     pub fn apply(&self, out: Tensor<3>, x_t: Tensor<3>, time: Tensor<2>) -> Tensor<3> {
-        let [b, _, c] = out.dims();
+        let [b, k, c] = out.dims();
         debug_assert_eq!(c, DIMS);
-        let mask = Tensor::<3>::from_data(
-            TensorData::new(self.skipped.clone(), [1, 1, c]),
-            &out.device(),
-        );
-        let g = self.gate.forward(time).reshape([b, 1, c]) * mask;
-        out + x_t * g
+        let frames = k / crate::layout::N_MAX;
+        let device = out.device();
+        let mask = Tensor::<3>::from_data(TensorData::new(self.skipped.clone(), [1, 1, c]), &device);
+        let gates = self.gate.forward(time).reshape([b, self.sigmas.len(), c]);
+        let window = crate::layout::from_tokens(x_t);
+        let mut x0 = out;
+        for (i, &sigma) in self.sigmas.iter().enumerate() {
+            let smoothed = if sigma > 0.0 {
+                let kernel = Tensor::<2>::from_data(
+                    TensorData::new(gaussian_rows(frames, sigma), [frames, frames]),
+                    &device,
+                );
+                kernel.unsqueeze::<3>().matmul(window.clone())
+            } else {
+                window.clone()
+            };
+            let g = gates.clone().narrow(1, i, 1) * mask.clone();
+            x0 = x0 + crate::layout::to_tokens(smoothed) * g;
+        }
+        x0
     }
+}
+
+/// `[frames, frames]` row-major: row `f` holds Gaussian weights of width `sigma` frames around
+/// frame `f`, cut at ±3σ and at the window's ends, summing to 1.
+pub fn gaussian_rows(frames: usize, sigma: f64) -> Vec<f32> {
+    let reach = (3.0 * sigma).ceil() as usize;
+    let mut m = vec![0f32; frames * frames];
+    for f in 0..frames {
+        let (lo, hi) = (f.saturating_sub(reach), (f + reach).min(frames - 1));
+        let w: Vec<f64> = (lo..=hi)
+            .map(|g| (-((g as f64 - f as f64) / sigma).powi(2) / 2.0).exp())
+            .collect();
+        let total: f64 = w.iter().sum();
+        for (g, wg) in (lo..=hi).zip(w) {
+            m[f * frames + g] = (wg / total) as f32;
+        }
+    }
+    m
 }
 
 /// The skip coefficients of [`Prediction::Velocity`] for the model's schedule.
@@ -169,17 +215,18 @@ mod tests {
     #[test]
     fn a_fresh_gate_is_the_x0_network_and_the_integrated_root_takes_no_skip() {
         let dev = dancegen_nn::device::inference();
-        let out = tensor(vec![2.0; 2 * DIMS], [2, 1, DIMS]);
-        let x_t = tensor(vec![-1.0; 2 * DIMS], [2, 1, DIMS]);
+        let k = crate::layout::N_MAX;
+        let out = tensor(vec![2.0; 2 * k * DIMS], [2, k, DIMS]);
+        let x_t = tensor(vec![-1.0; 2 * k * DIMS], [2, k, DIMS]);
         let time = Tensor::<2>::ones([2, 8], &dev);
-        let fresh = SkipGate::new(8, true, &dev);
+        let fresh = SkipGate::new(8, true, &[0.0], &dev);
         assert!(
             host(fresh.apply(out.clone(), x_t.clone(), time.clone()))
                 .iter()
                 .all(|&v| v == 2.0)
         );
         // A gate of 1 everywhere (bias 1): x̂0 = output + x_t, except the integrated root.
-        let mut open = SkipGate::new(8, true, &dev);
+        let mut open = SkipGate::new(8, true, &[0.0], &dev);
         open.gate.bias = Some(burn::module::Param::from_tensor(Tensor::ones([DIMS], &dev)));
         let got = host(open.apply(out, x_t, time));
         for (i, &v) in got.iter().enumerate() {
@@ -190,6 +237,31 @@ mod tests {
             };
             assert_eq!(v, want, "channel {}", i % DIMS);
         }
+    }
+
+    #[test]
+    fn the_smoothings_keep_a_constant_and_damp_frame_to_frame_noise() {
+        let frames = 40;
+        for sigma in [0.5, 1.0, 2.0, 4.0] {
+            let m = gaussian_rows(frames, sigma);
+            for f in 0..frames {
+                let row = &m[f * frames..(f + 1) * frames];
+                assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-5, "σ {sigma} row {f}");
+            }
+        }
+        // An alternating ±1 (noise at the frame rate) shrinks with the width; a slow wave
+        // (a 2 s period at 30 fps) stays.
+        let smoothed_amplitude = |sigma: f64, signal: &dyn Fn(usize) -> f32| {
+            let m = gaussian_rows(frames, sigma);
+            (10..30)
+                .map(|f| (0..frames).map(|g| m[f * frames + g] * signal(g)).sum::<f32>().abs())
+                .fold(0f32, f32::max)
+        };
+        let noise = |g: usize| if g % 2 == 0 { 1.0 } else { -1.0 };
+        assert!(smoothed_amplitude(1.0, &noise) < 0.02);
+        assert!(smoothed_amplitude(2.0, &noise) < 0.001);
+        let slow = |g: usize| (g as f32 * std::f32::consts::TAU / 60.0).sin();
+        assert!(smoothed_amplitude(2.0, &slow) > 0.95);
     }
 
     #[test]
