@@ -74,7 +74,10 @@ impl SkipGate {
     /// `time_dims`: the width of the timestep features it reads; `sigmas`: the smoothing
     /// widths in frames (at least one).
     pub fn new(time_dims: usize, root_integrated: bool, sigmas: &[f64], device: &Device) -> Self {
-        assert!(!sigmas.is_empty(), "a skip needs at least one smoothing width");
+        assert!(
+            !sigmas.is_empty(),
+            "a skip needs at least one smoothing width"
+        );
         Self {
             gate: LinearConfig::new(time_dims, sigmas.len() * DIMS)
                 .with_initializer(Initializer::Zeros)
@@ -93,7 +96,8 @@ impl SkipGate {
         debug_assert_eq!(c, DIMS);
         let frames = k / crate::layout::N_MAX;
         let device = out.device();
-        let mask = Tensor::<3>::from_data(TensorData::new(self.skipped.clone(), [1, 1, c]), &device);
+        let mask =
+            Tensor::<3>::from_data(TensorData::new(self.skipped.clone(), [1, 1, c]), &device);
         let gates = self.gate.forward(time).reshape([b, self.sigmas.len(), c]);
         let window = crate::layout::from_tokens(x_t);
         let mut x0 = out;
@@ -246,7 +250,10 @@ mod tests {
             let m = gaussian_rows(frames, sigma);
             for f in 0..frames {
                 let row = &m[f * frames..(f + 1) * frames];
-                assert!((row.iter().sum::<f32>() - 1.0).abs() < 1e-5, "σ {sigma} row {f}");
+                assert!(
+                    (row.iter().sum::<f32>() - 1.0).abs() < 1e-5,
+                    "σ {sigma} row {f}"
+                );
             }
         }
         // An alternating ±1 (noise at the frame rate) shrinks with the width; a slow wave
@@ -254,7 +261,12 @@ mod tests {
         let smoothed_amplitude = |sigma: f64, signal: &dyn Fn(usize) -> f32| {
             let m = gaussian_rows(frames, sigma);
             (10..30)
-                .map(|f| (0..frames).map(|g| m[f * frames + g] * signal(g)).sum::<f32>().abs())
+                .map(|f| {
+                    (0..frames)
+                        .map(|g| m[f * frames + g] * signal(g))
+                        .sum::<f32>()
+                        .abs()
+                })
                 .fold(0f32, f32::max)
         };
         let noise = |g: usize| if g % 2 == 0 { 1.0 } else { -1.0 };
