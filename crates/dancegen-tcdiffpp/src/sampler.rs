@@ -113,12 +113,57 @@ pub fn generate(
     } else {
         opts.sampler
     };
+    // A formation that gives every dancer at frame 0 in another order than left to right is
+    // danced in sorted slots (as every training window was) and handed back in its order.
+    let order = requested_order(req);
+    let sorted_control = order.as_ref().map(|perm| {
+        let c = req.control.expect("an order comes from the control");
+        let mut p = c.to_vec();
+        for (src, dst) in c.chunks_exact(N_MAX).zip(p.chunks_exact_mut(N_MAX)) {
+            for (s, &d) in perm.iter().enumerate() {
+                dst[s] = src[d];
+            }
+        }
+        p
+    });
+    let sorted_req = GroupRequest {
+        control: sorted_control.as_deref().or(req.control),
+        ..*req
+    };
     let mut out = match sampler {
-        LongSampler::Lgds => lgds(net, schedule, window, req, opts, device, hook)?,
-        LongSampler::Parallel => parallel(net, schedule, window, req, opts, device, hook)?,
+        LongSampler::Lgds => lgds(net, schedule, window, &sorted_req, opts, device, hook)?,
+        LongSampler::Parallel => parallel(net, schedule, window, &sorted_req, opts, device, hook)?,
     };
     out.truncate(req.frames * GROUP_DIMS);
-    Ok(out)
+    Ok(match order {
+        Some(perm) => permute(&out, &perm, true),
+        None => out,
+    })
+}
+
+/// The slot order (`perm[slot] = dancer`) that sorts the dancers left to right by their
+/// requested stage x at frame 0, when the request gives every dancer there, is not an edit
+/// (whose known frames LGDS sorts itself) and is not sorted already.
+///
+/// Why: the network only ever saw slots sorted left to right at frame 0 (TCDiff++ Eq. 5-7;
+/// its positioning embedding is the slot's rank). A formation listing its dancers right to
+/// left put a right-hand dancer in the left-hand slot; the x0 networks that ignored their
+/// input did not care, a network that reads its input flailed its limbs (joints moving 1.4 m
+/// in a frame; docs/group-collapse.md §19).
+fn requested_order(req: &GroupRequest) -> Option<Vec<usize>> {
+    if req.known.is_some() {
+        return None;
+    }
+    let c = req.control?;
+    let x: Vec<f32> = (0..req.dancers)
+        .map(|d| c[d].map(|p| p[0]))
+        .collect::<Option<_>>()?;
+    let mut perm: Vec<usize> = (0..req.dancers).collect();
+    perm.sort_by(|&a, &b| x[a].total_cmp(&x[b]).then(a.cmp(&b)));
+    perm.iter()
+        .enumerate()
+        .any(|(s, &d)| s != d)
+        .then_some(perm)
 }
 
 fn sample_options(

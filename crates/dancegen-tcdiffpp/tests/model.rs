@@ -423,6 +423,61 @@ fn the_learned_skip_copies_a_nearly_clean_input_that_the_x0_network_cannot() {
     assert!(skip < 0.05, "learned skip error {skip} (x0 network: {x0})");
 }
 
+#[test]
+fn a_formation_listed_right_to_left_is_danced_as_the_same_formation_left_to_right() {
+    // The network knows slots sorted left to right at frame 0 only; the order in which a
+    // FORMATION.json lists its dancers must not change the dance, only its labels.
+    let dev = device::inference();
+    let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
+    let schedule = Schedule::edge();
+    let (frames, window, n) = (37, 16, 3);
+    let music: Vec<f32> = (0..frames * MUSIC_DIMS)
+        .map(|i| ((i % 5) as f32) * 0.2)
+        .collect();
+    let paths = request_paths(frames, n);
+    let mut reversed = paths.clone();
+    for f in 0..frames {
+        for d in 0..n {
+            reversed[f * N_MAX + d] = paths[f * N_MAX + n - 1 - d];
+        }
+    }
+    for sampler in [LongSampler::Lgds, LongSampler::Parallel] {
+        let opts = GroupSampleOptions {
+            steps: 4,
+            eta: 1.0,
+            spacing: Spacing::Linear,
+            guidance: 2.0,
+            sampler,
+            prefix: PrefixMode::Clean,
+            seed: 5,
+        };
+        let run = |control: &[Option<RootXy>]| {
+            let req = GroupRequest {
+                music: &music,
+                frames,
+                dancers: n,
+                control: Some(control),
+                known: None,
+            };
+            generate(&m, &schedule, window, &req, &opts, &dev, &NoHook).unwrap()
+        };
+        let (a, b) = (run(&paths), run(&reversed));
+        for f in 0..frames {
+            for d in 0..n {
+                let at = |v: &[f32], dancer: usize| {
+                    v[f * GROUP_DIMS + channel(dancer, 0)..f * GROUP_DIMS + channel(dancer + 1, 0)]
+                        .to_vec()
+                };
+                assert_eq!(
+                    at(&a, d),
+                    at(&b, n - 1 - d),
+                    "{sampler:?}: frame {f}, dancer {d} listed first and last"
+                );
+            }
+        }
+    }
+}
+
 fn request_paths(frames: usize, n: usize) -> Vec<Option<RootXy>> {
     // Dancers on a line 1.2 m apart, drifting right and back; raw Z-up metres.
     let mut c = vec![None; frames * N_MAX];
