@@ -70,6 +70,9 @@ pub struct DenoiserConfig {
     /// With `prediction = "x0_skip"`: the widths (Gaussian σ, frames) of the smoothings of x_t
     /// the learned skip mixes; 0 is x_t itself ([`crate::prediction::SkipGate`]).
     pub skip_smoothing: Vec<f64>,
+    /// Whether those smoothings (σ > 0) carry the root rotation too (v12: yes; a fast turn's
+    /// blended heading tipped the body over, docs/group-collapse.md §20).
+    pub skip_smooth_root_rotation: bool,
 }
 
 impl Default for DenoiserConfig {
@@ -93,6 +96,7 @@ impl Default for DenoiserConfig {
             root_integrated: false,
             prediction: Prediction::X0,
             skip_smoothing: vec![0.0],
+            skip_smooth_root_rotation: true,
         }
     }
 }

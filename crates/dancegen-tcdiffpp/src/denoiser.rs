@@ -159,8 +159,15 @@ impl DenoiserConfig {
             fusion_residual: self.fusion_residual,
             velocity: (self.prediction == Prediction::Velocity)
                 .then(|| VelocitySkip::new(self.root_integrated)),
-            skip_gate: (self.prediction == Prediction::LearnedSkip)
-                .then(|| SkipGate::new(4 * d, self.root_integrated, &self.skip_smoothing, device)),
+            skip_gate: (self.prediction == Prediction::LearnedSkip).then(|| {
+                SkipGate::new(
+                    4 * d,
+                    self.root_integrated,
+                    &self.skip_smoothing,
+                    self.skip_smooth_root_rotation,
+                    device,
+                )
+            }),
         }
     }
 }

@@ -62,9 +62,10 @@ pub enum Prediction {
 #[derive(Module, Debug)]
 pub struct SkipGate {
     pub gate: Linear,
-    /// 1 where a token channel takes the skip (not the integrated root x/y).
+    /// Per smoothing, 1 where a token channel takes it: not the integrated root x/y, and not
+    /// the root rotation's 6D channels in the smoothings (σ > 0) when they are kept sharp.
     #[module(skip)]
-    skipped: Vec<f32>,
+    skipped: Vec<Vec<f32>>,
     /// `σ_k` in frames.
     #[module(skip)]
     sigmas: Vec<f64>,
@@ -72,18 +73,39 @@ pub struct SkipGate {
 
 impl SkipGate {
     /// `time_dims`: the width of the timestep features it reads; `sigmas`: the smoothing
-    /// widths in frames (at least one).
-    pub fn new(time_dims: usize, root_integrated: bool, sigmas: &[f64], device: &Device) -> Self {
+    /// widths in frames (at least one); `smooth_root_rotation`: whether the smoothings
+    /// (σ > 0) carry the root rotation's 6D channels too. Averaged over the frames of a fast
+    /// turn, those blend two headings, and orthonormalised the blend can tip the body over
+    /// (docs/group-collapse.md §20).
+    pub fn new(
+        time_dims: usize,
+        root_integrated: bool,
+        sigmas: &[f64],
+        smooth_root_rotation: bool,
+        device: &Device,
+    ) -> Self {
         assert!(
             !sigmas.is_empty(),
             "a skip needs at least one smoothing width"
         );
+        let root_rotation =
+            dancegen_nn::edge151::rot6d(0, 0)..dancegen_nn::edge151::rot6d(0, 5) + 1;
         Self {
             gate: LinearConfig::new(time_dims, sigmas.len() * DIMS)
                 .with_initializer(Initializer::Zeros)
                 .init(device),
-            skipped: (0..DIMS)
-                .map(|c| f32::from(u8::from(!(root_integrated && ROOT_HORIZONTAL.contains(&c)))))
+            skipped: sigmas
+                .iter()
+                .map(|&sigma| {
+                    (0..DIMS)
+                        .map(|c| {
+                            let integrated = root_integrated && ROOT_HORIZONTAL.contains(&c);
+                            let sharp =
+                                sigma > 0.0 && !smooth_root_rotation && root_rotation.contains(&c);
+                            f32::from(u8::from(!(integrated || sharp)))
+                        })
+                        .collect()
+                })
                 .collect(),
             sigmas: sigmas.to_vec(),
         }
@@ -96,8 +118,6 @@ impl SkipGate {
         debug_assert_eq!(c, DIMS);
         let frames = k / crate::layout::N_MAX;
         let device = out.device();
-        let mask =
-            Tensor::<3>::from_data(TensorData::new(self.skipped.clone(), [1, 1, c]), &device);
         let gates = self.gate.forward(time).reshape([b, self.sigmas.len(), c]);
         let window = crate::layout::from_tokens(x_t);
         let mut x0 = out;
@@ -111,7 +131,11 @@ impl SkipGate {
             } else {
                 window.clone()
             };
-            let g = gates.clone().narrow(1, i, 1) * mask.clone();
+            let mask = Tensor::<3>::from_data(
+                TensorData::new(self.skipped[i].clone(), [1, 1, c]),
+                &device,
+            );
+            let g = gates.clone().narrow(1, i, 1) * mask;
             x0 = x0 + crate::layout::to_tokens(smoothed) * g;
         }
         x0
@@ -223,14 +247,14 @@ mod tests {
         let out = tensor(vec![2.0; 2 * k * DIMS], [2, k, DIMS]);
         let x_t = tensor(vec![-1.0; 2 * k * DIMS], [2, k, DIMS]);
         let time = Tensor::<2>::ones([2, 8], &dev);
-        let fresh = SkipGate::new(8, true, &[0.0], &dev);
+        let fresh = SkipGate::new(8, true, &[0.0], true, &dev);
         assert!(
             host(fresh.apply(out.clone(), x_t.clone(), time.clone()))
                 .iter()
                 .all(|&v| v == 2.0)
         );
         // A gate of 1 everywhere (bias 1): x̂0 = output + x_t, except the integrated root.
-        let mut open = SkipGate::new(8, true, &[0.0], &dev);
+        let mut open = SkipGate::new(8, true, &[0.0], true, &dev);
         open.gate.bias = Some(burn::module::Param::from_tensor(Tensor::ones([DIMS], &dev)));
         let got = host(open.apply(out, x_t, time));
         for (i, &v) in got.iter().enumerate() {
@@ -240,6 +264,37 @@ mod tests {
                 1.0
             };
             assert_eq!(v, want, "channel {}", i % DIMS);
+        }
+    }
+
+    #[test]
+    fn a_sharp_root_rotation_takes_only_the_unsmoothed_skip() {
+        let dev = dancegen_nn::device::inference();
+        let k = crate::layout::N_MAX * 4;
+        let out = tensor(vec![2.0; k * DIMS], [1, k, DIMS]);
+        let x_t = tensor(vec![-1.0; k * DIMS], [1, k, DIMS]);
+        let time = Tensor::<2>::ones([1, 8], &dev);
+        for smooth_root_rotation in [true, false] {
+            let mut gate = SkipGate::new(8, true, &[0.0, 2.0], smooth_root_rotation, &dev);
+            gate.gate.bias = Some(burn::module::Param::from_tensor(Tensor::ones(
+                [2 * DIMS],
+                &dev,
+            )));
+            // A constant input is its own smoothing: each skip adds −1 where it is taken.
+            let got = host(gate.apply(out.clone(), x_t.clone(), time.clone()));
+            let root_rotation =
+                dancegen_nn::edge151::rot6d(0, 0)..dancegen_nn::edge151::rot6d(1, 0);
+            for (i, &v) in got.iter().enumerate() {
+                let c = i % DIMS;
+                let want = if ROOT_HORIZONTAL.contains(&c) {
+                    2.0
+                } else if root_rotation.contains(&c) && !smooth_root_rotation {
+                    1.0
+                } else {
+                    0.0
+                };
+                assert!((v - want).abs() < 1e-5, "channel {c}: {v} against {want}");
+            }
         }
     }
 
