@@ -324,7 +324,7 @@ mod tests {
                 })
                 .fold(0f32, f32::max)
         };
-        let noise = |g: usize| if g % 2 == 0 { 1.0 } else { -1.0 };
+        let noise = |g: usize| if g.is_multiple_of(2) { 1.0 } else { -1.0 };
         assert!(smoothed_amplitude(1.0, &noise) < 0.02);
         assert!(smoothed_amplitude(2.0, &noise) < 0.001);
         let slow = |g: usize| (g as f32 * std::f32::consts::TAU / 60.0).sin();
