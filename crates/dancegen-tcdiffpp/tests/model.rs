@@ -423,6 +423,28 @@ fn the_learned_skip_copies_a_nearly_clean_input_that_the_x0_network_cannot() {
     assert!(skip < 0.05, "learned skip error {skip} (x0 network: {x0})");
 }
 
+/// The long samplers' test case: 37 frames in 16-frame windows, 3 dancers, a periodic music.
+const SAMPLED: (usize, usize, usize) = (37, 16, 3);
+
+fn sampled_music(frames: usize) -> Vec<f32> {
+    (0..frames * MUSIC_DIMS)
+        .map(|i| ((i % 7) as f32) * 0.1)
+        .collect()
+}
+
+/// 4 linear DDIM steps with guidance 2.
+fn short_sampling(sampler: LongSampler, prefix: PrefixMode, seed: u64) -> GroupSampleOptions {
+    GroupSampleOptions {
+        steps: 4,
+        eta: 1.0,
+        spacing: Spacing::Linear,
+        guidance: 2.0,
+        sampler,
+        prefix,
+        seed,
+    }
+}
+
 #[test]
 fn a_formation_listed_right_to_left_is_danced_as_the_same_formation_left_to_right() {
     // The network knows slots sorted left to right at frame 0 only; the order in which a
@@ -430,10 +452,8 @@ fn a_formation_listed_right_to_left_is_danced_as_the_same_formation_left_to_righ
     let dev = device::inference();
     let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
     let schedule = Schedule::edge();
-    let (frames, window, n) = (37, 16, 3);
-    let music: Vec<f32> = (0..frames * MUSIC_DIMS)
-        .map(|i| ((i % 5) as f32) * 0.2)
-        .collect();
+    let (frames, window, n) = SAMPLED;
+    let music = sampled_music(frames);
     let paths = request_paths(frames, n);
     let mut reversed = paths.clone();
     for f in 0..frames {
@@ -442,15 +462,7 @@ fn a_formation_listed_right_to_left_is_danced_as_the_same_formation_left_to_righ
         }
     }
     for sampler in [LongSampler::Lgds, LongSampler::Parallel] {
-        let opts = GroupSampleOptions {
-            steps: 4,
-            eta: 1.0,
-            spacing: Spacing::Linear,
-            guidance: 2.0,
-            sampler,
-            prefix: PrefixMode::Clean,
-            seed: 5,
-        };
+        let opts = short_sampling(sampler, PrefixMode::Clean, 5);
         let run = |control: &[Option<RootXy>]| {
             let req = GroupRequest {
                 music: &music,
@@ -495,22 +507,12 @@ fn both_long_samplers_follow_requested_paths_and_are_seeded() {
     let dev = device::inference();
     let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
     let schedule = Schedule::edge();
-    let (frames, window, n) = (37, 16, 3);
-    let music: Vec<f32> = (0..frames * MUSIC_DIMS)
-        .map(|i| ((i % 7) as f32) * 0.1)
-        .collect();
+    let (frames, window, n) = SAMPLED;
+    let music = sampled_music(frames);
     let paths = request_paths(frames, n);
     for sampler in [LongSampler::Lgds, LongSampler::Parallel] {
         for prefix in [PrefixMode::Clean, PrefixMode::Renoised] {
-            let opts = GroupSampleOptions {
-                steps: 4,
-                eta: 1.0,
-                spacing: Spacing::Linear,
-                guidance: 2.0,
-                sampler,
-                prefix,
-                seed: 3,
-            };
+            let opts = short_sampling(sampler, prefix, 3);
             let req = GroupRequest {
                 music: &music,
                 frames,
