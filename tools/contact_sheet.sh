@@ -129,6 +129,7 @@ PY
 }
 
 tiles=()
+longest=0
 row=0
 n_file=0
 for spec in "$@"; do
@@ -150,15 +151,20 @@ for spec in "$@"; do
         "$DANCEGEN" -q render "${drawn[@]}" -o "$tile" --frame "$f" --width "$WIDTH" \
             --height "$HEIGHT"
         secs=$(awk -v f="$f" -v r="$FPS" 'BEGIN{printf "%.1f", f / r}')
-        tiles+=(-label "$(escape_label "$label, $secs s (frame $f)")" "$tile")
+        text="$label, $secs s (frame $f)"
+        [ "${#text}" -gt "$longest" ] && longest=${#text}
+        tiles+=(-label "$(escape_label "$text")" "$tile")
         col=$((col + 1))
     done
     row=$((row + 1))
 done
 
+# Labels are drawn at 15 pt unless the longest would be wider than its picture (a DejaVu Sans
+# character is about 0.56 em wide): then smaller, down to 9 pt, so neighbours do not overlap.
+pointsize=$(awk -v w="$WIDTH" -v n="$longest" 'BEGIN{p = 15; if (n > 0 && w / (0.56 * n) < p) p = int(w / (0.56 * n)); if (p < 9) p = 9; print p}')
 mkdir -p "$(dirname "$OUT_PNG")"
 part=${OUT_PNG%.*}.part$$.png
-"${MONTAGE[@]}" "${FONT_ARGS[@]}" -pointsize 15 -background white "${tiles[@]}" \
+"${MONTAGE[@]}" "${FONT_ARGS[@]}" -pointsize "$pointsize" -background white "${tiles[@]}" \
     -tile "${#frames[@]}x$row" -geometry "${WIDTH}x${HEIGHT}+4+4" "$part" \
     || { rm -f "$part"; echo "contact_sheet: montage failed" >&2; exit 1; }
 mv -f "$part" "$OUT_PNG"
