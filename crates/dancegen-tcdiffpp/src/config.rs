@@ -70,8 +70,8 @@ pub struct DenoiserConfig {
     /// With `prediction = "x0_skip"`: the widths (Gaussian σ, frames) of the smoothings of x_t
     /// the learned skip mixes; 0 is x_t itself ([`crate::prediction::SkipGate`]).
     pub skip_smoothing: Vec<f64>,
-    /// Whether those smoothings (σ > 0) carry the root rotation too (v12: yes; a fast turn's
-    /// blended heading tipped the body over, docs/group-collapse.md §20).
+    /// Whether those smoothings (σ > 0) carry the root rotation too (v12: yes; in fast turns
+    /// under a formation the body tipped over, docs/group-collapse.md §20).
     pub skip_smooth_root_rotation: bool,
 }
 

@@ -74,9 +74,8 @@ pub struct SkipGate {
 impl SkipGate {
     /// `time_dims`: the width of the timestep features it reads; `sigmas`: the smoothing
     /// widths in frames (at least one); `smooth_root_rotation`: whether the smoothings
-    /// (σ > 0) carry the root rotation's 6D channels too. Averaged over the frames of a fast
-    /// turn, those blend two headings, and orthonormalised the blend can tip the body over
-    /// (docs/group-collapse.md §20).
+    /// (σ > 0) carry the root rotation's 6D channels too. With them, v12's dancers tipped
+    /// over in fast turns under a formation; without them, not (docs/group-collapse.md §20).
     pub fn new(
         time_dims: usize,
         root_integrated: bool,
