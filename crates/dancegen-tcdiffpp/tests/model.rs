@@ -426,10 +426,18 @@ fn the_learned_skip_copies_a_nearly_clean_input_that_the_x0_network_cannot() {
 /// The long samplers' test case: 37 frames in 16-frame windows, 3 dancers, a periodic music.
 const SAMPLED: (usize, usize, usize) = (37, 16, 3);
 
-fn sampled_music(frames: usize) -> Vec<f32> {
-    (0..frames * MUSIC_DIMS)
+/// A tiny network, the schedule, the music and the requested paths of [`SAMPLED`].
+fn sampled_case(dev: &Device) -> (GroupDenoiser, Schedule, Vec<f32>, Vec<Option<RootXy>>) {
+    let (frames, _, n) = SAMPLED;
+    let music = (0..frames * MUSIC_DIMS)
         .map(|i| ((i % 7) as f32) * 0.1)
-        .collect()
+        .collect();
+    (
+        net(&tiny(SequenceMixer::CrossAttention), dev),
+        Schedule::edge(),
+        music,
+        request_paths(frames, n),
+    )
 }
 
 /// 4 linear DDIM steps with guidance 2.
@@ -450,11 +458,8 @@ fn a_formation_listed_right_to_left_is_danced_as_the_same_formation_left_to_righ
     // The network knows slots sorted left to right at frame 0 only; the order in which a
     // FORMATION.json lists its dancers must not change the dance, only its labels.
     let dev = device::inference();
-    let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
-    let schedule = Schedule::edge();
+    let (m, schedule, music, paths) = sampled_case(&dev);
     let (frames, window, n) = SAMPLED;
-    let music = sampled_music(frames);
-    let paths = request_paths(frames, n);
     let mut reversed = paths.clone();
     for f in 0..frames {
         for d in 0..n {
@@ -505,11 +510,8 @@ fn request_paths(frames: usize, n: usize) -> Vec<Option<RootXy>> {
 #[test]
 fn both_long_samplers_follow_requested_paths_and_are_seeded() {
     let dev = device::inference();
-    let m = net(&tiny(SequenceMixer::CrossAttention), &dev);
-    let schedule = Schedule::edge();
+    let (m, schedule, music, paths) = sampled_case(&dev);
     let (frames, window, n) = SAMPLED;
-    let music = sampled_music(frames);
-    let paths = request_paths(frames, n);
     for sampler in [LongSampler::Lgds, LongSampler::Parallel] {
         for prefix in [PrefixMode::Clean, PrefixMode::Renoised] {
             let opts = short_sampling(sampler, prefix, 3);

@@ -342,23 +342,31 @@ fn systems_page_and_viewer_are_served() {
 /// `edit` in a job's params (issue 44): a new job, the same song and system, the frames
 /// outside the regenerated range the edited dance's, the range new; bad edits get a 400 that
 /// names the field.
-#[test]
-fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
-    let s = start(Limits::default());
-    let r = s.submit_song(&demo_song(), r#"{"seed": 1, "end": 10}"#);
+/// Dances `params` on the demo song, then submits an edit of that job (seed 7, 3-6 s
+/// regenerated, `keep` kept); returns both jobs once done.
+fn dance_then_edit(s: &TestServer, params: &str, keep: &str) -> (Value, Value) {
+    let r = s.submit_song(&demo_song(), params);
     assert_eq!(r.status, 202, "{}", r.json);
     let id = r.json["id"].as_str().unwrap().to_string();
     let job = s.wait(&id, JOB_TIMEOUT);
     assert_eq!(job["state"], "done", "{job}");
-
-    let params = format!(
-        r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]], "keep": "legs"}}}}"#
+    let edit = format!(
+        r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]], "keep": "{keep}"}}}}"#
     );
-    let r = s.submit(&[("params", None, params.as_bytes())]);
+    let r = s.submit(&[("params", None, edit.as_bytes())]);
     assert_eq!(r.status, 202, "{}", r.json);
     let eid = r.json["id"].as_str().unwrap().to_string();
     let edited = s.wait(&eid, JOB_TIMEOUT);
     assert_eq!(edited["state"], "done", "{edited}");
+    (job, edited)
+}
+
+#[test]
+fn an_edit_is_a_new_version_that_keeps_the_dance_outside_its_range() {
+    let s = start(Limits::default());
+    let (job, edited) = dance_then_edit(&s, r#"{"seed": 1, "end": 10}"#, "legs");
+    let id = job["id"].as_str().unwrap().to_string();
+    let eid = edited["id"].as_str().unwrap().to_string();
     assert_eq!(edited["params"]["system"], "solo");
     assert_eq!(edited["params"]["end"], 10.0);
     assert_eq!(edited["params"]["edit"]["of"], id.as_str());
@@ -501,23 +509,11 @@ fn a_group_edit_keeps_every_dancer_outside_its_range() {
 #[test]
 fn a_holistic_edit_keeps_the_arms_it_is_asked_to_keep() {
     let s = start(Limits::default());
-    let r = s.submit_song(
-        &demo_song(),
+    let (job, edited) = dance_then_edit(
+        &s,
         r#"{"system": "holistic", "seed": 1, "end": 10}"#,
+        "arms",
     );
-    assert_eq!(r.status, 202, "{}", r.json);
-    let id = r.json["id"].as_str().unwrap().to_string();
-    let job = s.wait(&id, JOB_TIMEOUT);
-    assert_eq!(job["state"], "done", "{job}");
-
-    let params = format!(
-        r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[3, 6]], "keep": "arms"}}}}"#
-    );
-    let r = s.submit(&[("params", None, params.as_bytes())]);
-    assert_eq!(r.status, 202, "{}", r.json);
-    let eid = r.json["id"].as_str().unwrap().to_string();
-    let edited = s.wait(&eid, JOB_TIMEOUT);
-    assert_eq!(edited["state"], "done", "{edited}");
     assert_eq!(edited["params"]["system"], "holistic");
     // The SMPL-H rotations (T, 156) of the .npz each job serves.
     let poses = |job: &Value| {
