@@ -78,6 +78,11 @@ impl GroupModel {
                 format!("kind {:?} is not a group model ({KIND:?})", config.kind),
             ));
         }
+        config
+            .model
+            .denoiser
+            .check()
+            .map_err(|e| invalid(&p, format!("[model.denoiser] {e}")))?;
         let w = config.model.window();
         if w < 2 || !w.is_multiple_of(2) {
             return Err(invalid(

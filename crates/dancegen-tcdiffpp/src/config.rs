@@ -101,9 +101,38 @@ impl Default for DenoiserConfig {
     }
 }
 
+/// Largest smoothing width of the learned skip, in frames: 33 s at 30 fps, far beyond any
+/// window (150 frames), so only a typo or a wrong unit goes past it.
+pub const MAX_SKIP_SMOOTHING: f64 = 1000.0;
+
 impl DenoiserConfig {
     pub fn fusion_hidden(&self) -> usize {
         self.fusion_hidden.unwrap_or(2 * self.d_model)
+    }
+
+    /// What deserialising cannot check: with `prediction = "x0_skip"`, at least one smoothing
+    /// width, each a number of frames in `0..=MAX_SKIP_SMOOTHING`.
+    pub fn check(&self) -> Result<(), String> {
+        if self.prediction != Prediction::LearnedSkip {
+            return Ok(());
+        }
+        if self.skip_smoothing.is_empty() {
+            return Err(
+                "skip_smoothing is empty: the learned skip needs at least one width \
+                        (0 is the input itself)"
+                    .into(),
+            );
+        }
+        match self
+            .skip_smoothing
+            .iter()
+            .find(|s| !(0.0..=MAX_SKIP_SMOOTHING).contains(*s))
+        {
+            Some(s) => Err(format!(
+                "skip_smoothing {s}: a width must be 0 to {MAX_SKIP_SMOOTHING} frames"
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -244,5 +273,30 @@ impl GroupModelConfig {
     /// Parses a `[model]` table (or a whole `model.toml`).
     pub fn from_toml(text: &str) -> Result<Self, toml::de::Error> {
         toml::from_str(text)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skip_smoothing_widths_are_checked() {
+        let skip = |widths: Vec<f64>| DenoiserConfig {
+            prediction: Prediction::LearnedSkip,
+            skip_smoothing: widths,
+            ..DenoiserConfig::default()
+        };
+        assert!(skip(vec![0.0, 1.0, 4.0]).check().is_ok());
+        for bad in [vec![], vec![-1.0], vec![f64::NAN], vec![1e30]] {
+            let e = skip(bad.clone()).check().unwrap_err();
+            assert!(e.contains("skip_smoothing"), "{bad:?}: {e}");
+        }
+        // Other predictions never read the widths.
+        let x0 = DenoiserConfig {
+            skip_smoothing: vec![],
+            ..DenoiserConfig::default()
+        };
+        assert!(x0.check().is_ok());
     }
 }

@@ -94,15 +94,12 @@ pub fn shift_roots(frames: &mut [f32], n: usize, offset: [f32; 2]) {
 /// the stage's x is the world's (`dancegen_refine::formation`).
 pub const STAGE_X: usize = ROOT_HORIZONTAL[0];
 
-/// The slot order that sorts dancers left to right by stage x at frame 0 (ties by index), for
-/// per-dancer EDGE-151 sequences `dancers[d]` (`[T, 151]`, flat).
-pub fn left_to_right(dancers: &[&[f32]]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..dancers.len()).collect();
-    idx.sort_by(|&a, &b| {
-        dancers[a][STAGE_X]
-            .total_cmp(&dancers[b][STAGE_X])
-            .then(a.cmp(&b))
-    });
+/// The slot order (`order[slot] = dancer`) that sorts dancers left to right by their stage x
+/// (ties by index): the order of every training window's slots at its frame 0 (TCDiff++
+/// Eq. 5-7), and so of every window the samplers make.
+pub fn left_to_right(stage_x: &[f32]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..stage_x.len()).collect();
+    idx.sort_by(|&a, &b| stage_x[a].total_cmp(&stage_x[b]).then(a.cmp(&b)));
     idx
 }
 
@@ -150,12 +147,8 @@ mod tests {
 
     #[test]
     fn sorting_and_centroids() {
-        let mut a = vec![0f32; DIMS];
-        let mut b = vec![0f32; DIMS];
-        a[STAGE_X] = 1.0;
-        b[STAGE_X] = -1.0;
-        b[5] = 2.0;
-        assert_eq!(left_to_right(&[&a, &b]), vec![1, 0]);
+        assert_eq!(left_to_right(&[1.0, -1.0]), vec![1, 0]);
+        assert_eq!(left_to_right(&[0.5, -2.0, 0.5]), vec![1, 0, 2]);
         let mut frame = vec![0f32; GROUP_DIMS];
         frame[channel(0, 4)] = 1.0;
         frame[channel(1, 4)] = 3.0;

@@ -39,7 +39,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use crate::config::{LongSampler, PrefixMode};
 use crate::denoiser::{GroupCond, GroupDenoiser, MUSIC_DIMS, PreparedGroupDenoiser};
 use crate::known::GroupKnown;
-use crate::layout::{GROUP_DIMS, N_MAX, centroid, channel, shift_roots};
+use crate::layout::{GROUP_DIMS, N_MAX, STAGE_X, centroid, channel, left_to_right, shift_roots};
 use crate::swap::{identity_code, swap_code};
 
 /// A requested root position: raw Z-up `(x, y)` metres.
@@ -158,8 +158,7 @@ fn requested_order(req: &GroupRequest) -> Option<Vec<usize>> {
     let x: Vec<f32> = (0..req.dancers)
         .map(|d| c[d].map(|p| p[0]))
         .collect::<Option<_>>()?;
-    let mut perm: Vec<usize> = (0..req.dancers).collect();
-    perm.sort_by(|&a, &b| x[a].total_cmp(&x[b]).then(a.cmp(&b)));
+    let perm = left_to_right(&x);
     perm.iter()
         .enumerate()
         .any(|(s, &d)| s != d)
@@ -253,13 +252,8 @@ fn window_control(
 
 /// Slot order sorting the first `n` slots of one group frame left to right (stage x).
 pub(crate) fn sorted_slots(frame: &[f32], n: usize) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.sort_by(|&a, &b| {
-        frame[channel(a, ROOT_HORIZONTAL[0])]
-            .total_cmp(&frame[channel(b, ROOT_HORIZONTAL[0])])
-            .then(a.cmp(&b))
-    });
-    idx
+    let x: Vec<f32> = (0..n).map(|s| frame[channel(s, STAGE_X)]).collect();
+    left_to_right(&x)
 }
 
 /// `frames` `[T, N_MAX·151]` with slot `s` taken from dancer `perm[s]` (`inverse = false`) or

@@ -83,6 +83,9 @@ impl GroupTask {
         let cfg: GroupModelConfig = toml::Value::Table(params)
             .try_into()
             .map_err(|e: toml::de::Error| format!("[model]: {}", e.message()))?;
+        cfg.denoiser
+            .check()
+            .map_err(|e| format!("[model.denoiser] {e}"))?;
         if config.data.window != cfg.window() {
             return Err(format!(
                 "[data] window = {} but the model's window is {} frames",
