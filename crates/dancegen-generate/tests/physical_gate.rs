@@ -72,7 +72,7 @@ enum Bound {
     Within(f64),
     /// `≤ max` over the real takes without a capture glitch: single-frame jumps.
     CleanMax,
-    /// `≤ max`: leg crossing.
+    /// `≤ max`: leg crossing, a pelvis off its feet.
     AtMost,
 }
 
@@ -83,7 +83,7 @@ fn bound_of(key: &str) -> Bound {
         "foot_slide" | "jerk" | "jerk_p99" => Bound::AtMostTimes(1.5),
         "joint_speed" | "pelvis_speed" | "step_rate" => Bound::Within(0.25),
         "max_step" | "spikes" => Bound::CleanMax,
-        "leg_cross" => Bound::AtMost,
+        "leg_cross" | "lean" => Bound::AtMost,
         other => panic!("no bound for the physical figure {other}: add one"),
     }
 }

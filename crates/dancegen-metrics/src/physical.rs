@@ -17,6 +17,7 @@
 //! | `max_step` | largest single-frame displacement of any joint | m |
 //! | `spikes` | frame steps in which some joint moves faster than [`SPIKE_SPEED_MS`] | count |
 //! | `leg_cross` | share of frames with crossed legs ([`shins_crossed`]) | % |
+//! | `lean` | share of frames whose pelvis is more than [`LEAN_M`] horizontally from the midpoint of the ankles | % |
 //! | `joint_speed` | mean speed over joints and frame steps | m/s |
 //! | `pelvis_speed` | mean horizontal speed of the pelvis | m/s |
 //! | `step_rate` | foot steps of both feet per second ([`count_steps`]) | 1/s |
@@ -34,6 +35,13 @@ const R_HIP: usize = 2;
 const L_KNEE: usize = 4;
 const R_KNEE: usize = 5;
 const PELVIS: usize = 0;
+/// A pelvis further than this horizontally from the midpoint of its ankles leans: the legs
+/// slant under a body the feet no longer carry (seen in the group model's controlled dances,
+/// docs/group-collapse.md §21). Real dance leans too, in lunges and deep side steps: on the real
+/// held-out tracks of docs/group-eval.md at their true rates (`dancegen eval --pred
+/// target/group-eval/real --fps 30 --metrics lean` after `tools/group_eval.sh`), the four salsa
+/// takes lean in 0-2.3 % of frames and CMU 05_07 (modern dance) in 11.4 %.
+pub const LEAN_M: f64 = 0.3;
 /// Foot joints whose lowest point is "the foot" for the floor figures.
 pub const FOOT_JOINTS: [usize; 4] = [L_ANKLE, R_ANKLE, L_TOE, R_TOE];
 
@@ -81,6 +89,8 @@ pub struct Physical {
     pub spikes: usize,
     /// Share of frames, in percent.
     pub leg_cross_pct: f64,
+    /// Share of frames, in percent.
+    pub lean_pct: f64,
     pub joint_speed: f64,
     pub pelvis_speed: f64,
     pub step_rate: f64,
@@ -88,7 +98,7 @@ pub struct Physical {
 
 impl Physical {
     /// `(key, value)` in [`KEYS`] order; `None` where undefined.
-    pub fn entries(&self) -> [(&'static str, Option<f64>); 13] {
+    pub fn entries(&self) -> [(&'static str, Option<f64>); 14] {
         let values = [
             Some(self.floor_median),
             Some(self.floor_p05),
@@ -100,6 +110,7 @@ impl Physical {
             Some(self.max_step),
             Some(self.spikes as f64),
             Some(self.leg_cross_pct),
+            Some(self.lean_pct),
             Some(self.joint_speed),
             Some(self.pelvis_speed),
             Some(self.step_rate),
@@ -109,7 +120,7 @@ impl Physical {
 }
 
 /// The keys of the figures, in the module table's order.
-pub const KEYS: [&str; 13] = [
+pub const KEYS: [&str; 14] = [
     "floor_median",
     "floor_p05",
     "floor_p95",
@@ -120,6 +131,7 @@ pub const KEYS: [&str; 13] = [
     "max_step",
     "spikes",
     "leg_cross",
+    "lean",
     "joint_speed",
     "pelvis_speed",
     "step_rate",
@@ -208,6 +220,12 @@ pub fn physical(joints: &[f64], fps: f64) -> Result<Physical, FeatureError> {
     let crossed = (0..frames)
         .filter(|&t| shins_crossed(&frame(joints, t)))
         .count();
+    let leaning = (0..frames)
+        .filter(|&t| {
+            let (pelvis, l, r) = (p(t, PELVIS), p(t, L_ANKLE), p(t, R_ANKLE));
+            (pelvis[0] - (l[0] + r[0]) / 2.0).hypot(pelvis[2] - (l[2] + r[2]) / 2.0) > LEAN_M
+        })
+        .count();
     let steps =
         count_steps(joints, fps, L_ANKLE, L_TOE)? + count_steps(joints, fps, R_ANKLE, R_TOE)?;
 
@@ -222,6 +240,7 @@ pub fn physical(joints: &[f64], fps: f64) -> Result<Physical, FeatureError> {
         max_step,
         spikes,
         leg_cross_pct: 100.0 * crossed as f64 / frames as f64,
+        lean_pct: 100.0 * leaning as f64 / frames as f64,
         joint_speed: fps * speed_sum / (steps_n * NUM_JOINTS as f64),
         pelvis_speed: fps * pelvis_sum / steps_n,
         step_rate: steps as f64 * fps / steps_n,

@@ -2,7 +2,7 @@
 //! standing, floating, gliding, teleporting, stepping and with its legs crossed.
 
 use dancegen_formats::bvh_motion::smpl_fk_f64;
-use dancegen_metrics::physical::{SPIKE_SPEED_MS, count_steps, physical, shins_crossed};
+use dancegen_metrics::physical::{LEAN_M, SPIKE_SPEED_MS, count_steps, physical, shins_crossed};
 
 const FPS: f64 = 30.0;
 
@@ -40,6 +40,7 @@ fn a_standing_body_is_on_the_floor_and_still() {
     assert!(p.jerk_mean < 1e-6 && p.jerk_p99 < 1e-6);
     assert_eq!((p.max_step, p.spikes), (0.0, 0));
     assert_eq!(p.leg_cross_pct, 0.0);
+    assert_eq!(p.lean_pct, 0.0);
     assert_eq!(
         (p.joint_speed, p.pelvis_speed, p.step_rate),
         (0.0, 0.0, 0.0)
@@ -211,4 +212,20 @@ fn entries_name_each_figure_by_its_key() {
     assert_eq!(get("step_rate"), Some(p.step_rate));
     let keys: Vec<&str> = p.entries().iter().map(|(k, _)| *k).collect();
     assert_eq!(keys, dancegen_metrics::physical::KEYS);
+}
+
+#[test]
+fn a_pelvis_off_its_feet_leans() {
+    // The standing body with its pelvis (only) moved sideways: 40 frames by 0.1 m less than
+    // LEAN_M, 20 by 0.1 m more (the rest pose's own pelvis stands well within 0.1 m of the ankles'
+    // midpoint); the ankles stay where they were.
+    let mut j = rest_body(60, |_| [0.0, 0.0, 0.0]);
+    for t in 0..60 {
+        let off = if t < 40 { LEAN_M - 0.1 } else { LEAN_M + 0.1 };
+        let pelvis = joint_mut(&mut j, t, 0);
+        pelvis[0] += off * 0.6;
+        pelvis[2] += off * 0.8;
+    }
+    let p = physical(&j, FPS).unwrap();
+    assert!((p.lean_pct - 100.0 / 3.0).abs() < 1e-9, "{}", p.lean_pct);
 }

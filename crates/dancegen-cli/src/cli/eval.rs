@@ -59,8 +59,8 @@ pub struct EvalArgs {
     /// with --leader): fid_k,fid_g,div_k,div_g,bas,pfc,fsr,fsd,mpjpe,penetration,gmr,gmc,tif,
     /// collision,min_distance,fid_cd,div_cd,bed,ipr,contact_range,freeze,inverted,
     /// boundary_jerk,genre, and the physical figures floor_median,floor_p05,floor_p95,float,
-    /// foot_slide,jerk,jerk_p99,max_step,spikes,leg_cross,joint_speed,pelvis_speed,step_rate
-    /// (world joints in metres, floor at y = 0). Groups: `physical` (those thirteen), `all`
+    /// foot_slide,jerk,jerk_p99,max_step,spikes,leg_cross,lean,joint_speed,pelvis_speed,
+    /// step_rate (world joints in metres, floor at y = 0). Groups: `physical` (those fourteen), `all`
     /// (every metric the inputs allow, the default).
     #[arg(long)]
     pub metrics: Option<String>,
