@@ -7,6 +7,8 @@
 //!   `dancegen-motion` (one source of truth for offsets and parents).
 //! - [`foot_contact`]: EDGE's foot loss, velocity of the foot joints on frames where the model's
 //!   own predicted contact exceeds 0.95.
+//! - [`leg_crossing`]: ours, a hinge on shins that touch or swap sides (the crossed shins the
+//!   physical metrics count, `dancegen_metrics::physical::shins_crossed`).
 //! - [`commitment`]: VQ commitment `‖z_e − sg(z_q)‖²`.
 //! - [`info_nce`]: symmetric InfoNCE over a batch of paired embeddings (SoulNet's music–motion
 //!   retrieval); [`info_nce_filtered`] leaves near-duplicate negatives out (TMR's filtering).
@@ -176,6 +178,53 @@ pub fn foot_contact(feet: Tensor<4>, contact: Tensor<3>, threshold: f64) -> Tens
     (vel * on).powf_scalar(2.0).mean()
 }
 
+/// SMPL-24 joints of the legs: left and right hip, knee, ankle.
+const LEG_JOINTS: [[usize; 3]; 2] = [[1, 4, 7], [2, 5, 8]];
+
+/// Centre-line distance under which [`leg_crossing`] pushes the shins apart, metres: a little
+/// more than two shin radii (0.05 m, `dancegen_motion::capsule_body`), so shins are kept from
+/// touching rather than only from sinking into each other, which the metric counts.
+pub const SHIN_CLEARANCE_M: f64 = 0.08;
+
+/// Ours, not a paper's: per pose, a penalty on crossed shins, `[B, T]` from world joints
+/// `[B, T, 24, 3]` (Z-up, metres). Two hinges, on the two tests of the physical metrics' crossed
+/// shins:
+/// - shins too close: `Σ relu(SHIN_CLEARANCE_M − d)²` over the 9 pairs of points at the
+///   knee, the middle and the ankle of each shin;
+/// - legs swapped: along the horizontal hip axis (right hip → left hip), `relu(−knee gap) ·
+///   relu(−ankle gap)`, non-zero only where both the knees and the ankles are on the wrong
+///   side. An ankle alone crossing over is a dance step (a cross-body step) and costs nothing.
+pub fn leg_crossing(joints: Tensor<4>) -> Tensor<2> {
+    let [b, t, _, _] = joints.dims();
+    let joint = |j: usize| joints.clone().narrow(2, j, 1).reshape([b, t, 3]);
+    let [[lh, lk, la], [rh, rk, ra]] = LEG_JOINTS.map(|leg| leg.map(joint));
+    let points = |knee: &Tensor<3>, ankle: &Tensor<3>| {
+        [0.0, 0.5, 1.0].map(|a| knee.clone() * (1.0 - a) + ankle.clone() * a)
+    };
+    let (left, right) = (points(&lk, &la), points(&rk, &ra));
+    let mut close = Tensor::<2>::zeros([b, t], &joints.device());
+    for l in &left {
+        for r in &right {
+            let d = (l.clone() - r.clone())
+                .powf_scalar(2.0)
+                .sum_dim(2)
+                .reshape([b, t]);
+            let d = (d + 1e-10).sqrt();
+            close = close + relu(d.neg() + SHIN_CLEARANCE_M).powf_scalar(2.0);
+        }
+    }
+    let horizontal = |v: Tensor<3>| v.narrow(2, 0, 2);
+    let axis = horizontal(lh - rh);
+    let axis = axis.clone() / (axis.powf_scalar(2.0).sum_dim(2) + 1e-10).sqrt();
+    let gap = |l: Tensor<3>, r: Tensor<3>| {
+        (horizontal(l - r) * axis.clone())
+            .sum_dim(2)
+            .reshape([b, t])
+    };
+    let swapped = relu(gap(lk, rk).neg()) * relu(gap(la, ra).neg());
+    close + swapped
+}
+
 /// VQ commitment loss `mean((z_e − sg(z_q))²)`.
 pub fn commitment<const D: usize>(encoded: Tensor<D>, quantized: Tensor<D>) -> Tensor<1> {
     (encoded - quantized.detach()).powf_scalar(2.0).mean()
@@ -269,6 +318,53 @@ mod tests {
     }
     fn val(t: Tensor<1>) -> f32 {
         t.into_scalar::<f32>()
+    }
+
+    /// One pose `[1, 1, 24, 3]`: hips at x = ±0.1 m (left +), the given knees and ankles
+    /// (left, right), every other joint at the origin.
+    fn legs(knees: [[f32; 3]; 2], ankles: [[f32; 3]; 2]) -> Tensor<4> {
+        let mut v = vec![0f32; 24 * 3];
+        let mut put = |j: usize, p: [f32; 3]| v[j * 3..j * 3 + 3].copy_from_slice(&p);
+        put(1, [0.1, 0.0, 0.9]);
+        put(2, [-0.1, 0.0, 0.9]);
+        put(4, knees[0]);
+        put(5, knees[1]);
+        put(7, ankles[0]);
+        put(8, ankles[1]);
+        Tensor::from_data(TensorData::new(v, [1, 1, 24, 3]), &device::inference())
+    }
+
+    fn crossing(j: Tensor<4>) -> f32 {
+        leg_crossing(j).into_scalar::<f32>()
+    }
+
+    #[test]
+    fn crossed_shins_cost_and_a_cross_body_step_does_not() {
+        let apart = legs(
+            [[0.1, 0.0, 0.5], [-0.1, 0.0, 0.5]],
+            [[0.1, 0.0, 0.1], [-0.1, 0.0, 0.1]],
+        );
+        assert_eq!(crossing(apart), 0.0);
+        // The left ankle steps across in front of the right one: knees on their sides.
+        let cross_step = legs(
+            [[0.1, 0.0, 0.5], [-0.1, 0.0, 0.5]],
+            [[-0.12, 0.15, 0.1], [0.12, -0.15, 0.1]],
+        );
+        assert_eq!(crossing(cross_step), 0.0);
+        // Knees and ankles both on the wrong side, shins 0.3 m apart front to back: only the
+        // swap hinge, 0.1 · 0.1.
+        let swapped = legs(
+            [[-0.05, 0.15, 0.5], [0.05, -0.15, 0.5]],
+            [[-0.05, 0.15, 0.1], [0.05, -0.15, 0.1]],
+        );
+        assert!((crossing(swapped) - 0.01).abs() < 1e-6);
+        // Shins 2 cm apart side by side: each of the 3 matching pairs costs (0.08 − 0.02)².
+        let touching = legs(
+            [[0.01, 0.0, 0.5], [-0.01, 0.0, 0.5]],
+            [[0.01, 0.0, 0.1], [-0.01, 0.0, 0.1]],
+        );
+        let want = 3.0 * (0.06f32).powi(2);
+        assert!((crossing(touching) - want).abs() < 1e-5, "{want}");
     }
 
     #[test]

@@ -42,6 +42,7 @@ use crate::config::{DenoiserConfig, SequenceMixer};
 use crate::cross_mamba::CrossMambaLayer;
 use crate::footwork::FootworkAdaptor;
 use crate::fusion::FusionProjection;
+use crate::heading_path::HeadingPath;
 use crate::layout::{N_MAX, from_tokens, to_tokens, token_mask, token_padding};
 use crate::prediction::{Prediction, SkipGate, VelocitySkip};
 use crate::root_path::RootPath;
@@ -110,6 +111,8 @@ pub struct GroupDenoiser {
     pub velocity: Option<VelocitySkip>,
     /// The learned skip of [`crate::prediction::Prediction::LearnedSkip`].
     pub skip_gate: Option<SkipGate>,
+    /// The integrated heading ([`DenoiserConfig::heading_integrated`]).
+    pub heading_path: Option<HeadingPath>,
 }
 
 impl DenoiserConfig {
@@ -168,6 +171,7 @@ impl DenoiserConfig {
                     device,
                 )
             }),
+            heading_path: self.heading_integrated.then(|| HeadingPath::new(d, device)),
         }
     }
 }
@@ -296,7 +300,7 @@ impl GroupDenoiser {
         }
         let raw = host_linear::forward(&self.output, h.clone());
         let raw = match &self.root_path {
-            Some(r) => r.forward(raw, h),
+            Some(r) => r.forward(raw, h.clone()),
             None => raw,
         };
         let out = match &self.footwork {
@@ -307,6 +311,10 @@ impl GroupDenoiser {
             (Some(v), _) => v.apply(out, x_tokens, t),
             (None, Some(g)) => g.apply(out, x_tokens, time_features),
             (None, None) => out,
+        };
+        let out = match &self.heading_path {
+            Some(p) => p.forward(out, h, &self.denorm),
+            None => out,
         };
         from_tokens(out * mask)
     }

@@ -10,7 +10,8 @@
 //! - [`denoiser`]: the Group Dance Decoder (input projection + dancer positioning embedding,
 //!   [`fusion`] projection, FiLM transformer or [`cross_mamba`] sequence decoder layers,
 //!   [`swap`] mode as FiLM input and memory token) followed by the [`footwork`] adaptor;
-//!   optionally (ours) the root integrated from per-frame steps, [`root_path`].
+//!   optionally (ours) the root integrated from per-frame steps, [`root_path`], and the
+//!   heading from per-frame turns, [`heading_path`].
 //! - [`losses`]: EDGE's terms plus the pairwise distance-consistency loss (paper Eq. 16–17).
 //! - [`sampler`]: long group diffusion sampling (LGDS, keeping window 0) and the parallel
 //!   EDGE-style long-form sampler, both with formation control by clean root injection.
@@ -24,6 +25,7 @@ pub mod cross_mamba;
 pub mod denoiser;
 pub mod footwork;
 pub mod fusion;
+pub mod heading_path;
 pub mod known;
 pub mod layout;
 pub mod losses;

@@ -12,7 +12,9 @@
 //!   `(p_i − p_j) − (p̂_i − p̂_j)`, squared, summed over pairs, divided by `C − 1`, averaged
 //!   over frames. The released `dis_loss` (×100) is a per-dancer temporal Δroot error instead,
 //!   not pairwise (group.md §1 row 8); we implement the paper's, and the released one as its
-//!   own term `λ_rootvel L_rootvel` (`[model.loss] root_velocity`, 0 by default).
+//!   own term `λ_rootvel L_rootvel` (`[model.loss] root_velocity`, 0 by default);
+//! - ours, 0 by default: `λ_leg L_leg`, [`leg_crossing`] on x̂0's joints (`[model.loss]
+//!   leg_crossing`).
 //!
 //! Formation control (issue #17, group.md §1 row 12 "Proposal"): with probability
 //! `1 − control_drop` a window trains controlled — each active dancer, with probability
@@ -25,7 +27,7 @@ use dancegen_nn::burn;
 use dancegen_nn::diffusion::Schedule;
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::edge151::{CONTACTS, DIMS, FEET, ROOT_HORIZONTAL, displacement, joints};
-use dancegen_nn::loss::FkSkeleton;
+use dancegen_nn::loss::{FkSkeleton, leg_crossing};
 
 use burn::tensor::{Device, Tensor, TensorData};
 
@@ -209,6 +211,10 @@ pub fn group_loss(
         .sum()
         / joint_count;
 
+    let [bt, k, _, _] = jp.dims();
+    let crossing = (leg_crossing(jp.clone()).reshape([bt, k, 1, 1]) * tok_mask.clone()).sum()
+        / (active * t) as f64;
+
     // Foot velocity where the network predicts contact (per dancer, along frames).
     let per_dancer = |j: Tensor<4>| j.reshape([b, t, N_MAX * 24, 3]);
     let foot_v = displacement(per_dancer(jp)).reshape([b, t * N_MAX, 24, 3]);
@@ -235,7 +241,8 @@ pub fn group_loss(
         + fk.clone() * weights.fk
         + contact.clone() * weights.contact
         + distance.clone() * weights.distance
-        + root_velocity.clone() * weights.root_velocity;
+        + root_velocity.clone() * weights.root_velocity
+        + crossing.clone() * weights.leg_crossing;
     GroupLosses {
         total,
         parts: vec![
@@ -245,6 +252,7 @@ pub fn group_loss(
             ("contact", contact),
             ("distance", distance),
             ("root_velocity", root_velocity),
+            ("leg_crossing", crossing),
         ],
     }
 }

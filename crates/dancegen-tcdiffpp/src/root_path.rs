@@ -74,7 +74,7 @@ impl RootPath {
 }
 
 /// `[1, T, T]` lower-triangular ones: `L · v` sums `v` over frames `0..=t`.
-fn cumulative_sum(t: usize, device: &Device) -> Tensor<3> {
+pub(crate) fn cumulative_sum(t: usize, device: &Device) -> Tensor<3> {
     let mut m = vec![0f32; t * t];
     for i in 0..t {
         m[i * t..i * t + i + 1].fill(1.0);
