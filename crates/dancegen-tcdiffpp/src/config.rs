@@ -73,11 +73,14 @@ pub struct DenoiserConfig {
     /// Whether those smoothings (σ > 0) carry the root rotation too (v12: yes; in fast turns
     /// under a formation the body tipped over, docs/group-collapse.md §20).
     pub skip_smooth_root_rotation: bool,
-    /// Our option, not the paper's: each dancer's heading in x̂0 is integrated from per-frame
-    /// turns and placed at the window's mean heading ([`crate::heading_path`]), so neither a
-    /// smoothing across a fast turn nor its input's noise reaches the heading
-    /// (docs/group-collapse.md §21).
+    /// Our option, not the paper's: each dancer's root rotation in x̂0 is split into a heading
+    /// and the rest (the tilt); the heading is x̂0's own plus a learned turn integrated from
+    /// per-frame turns ([`crate::heading_path`]). With `root_rotation_smoothing`, both are
+    /// smoothed, the heading as an angle, so that neither the input's noise nor a smoothing of
+    /// the 6D rows across a fast turn reaches them (docs/group-collapse.md §21).
     pub heading_integrated: bool,
+    /// With `heading_integrated`: σ in frames of the root rotation's smoothing (0: none).
+    pub root_rotation_smoothing: f64,
 }
 
 impl Default for DenoiserConfig {
@@ -103,6 +106,7 @@ impl Default for DenoiserConfig {
             skip_smoothing: vec![0.0],
             skip_smooth_root_rotation: true,
             heading_integrated: false,
+            root_rotation_smoothing: 0.0,
         }
     }
 }
@@ -116,9 +120,20 @@ impl DenoiserConfig {
         self.fusion_hidden.unwrap_or(2 * self.d_model)
     }
 
-    /// What deserialising cannot check: with `prediction = "x0_skip"`, at least one smoothing
-    /// width, each a number of frames in `0..=MAX_SKIP_SMOOTHING`.
+    /// What deserialising cannot check: `root_rotation_smoothing` and, with `prediction =
+    /// "x0_skip"`, at least one smoothing width; each width a number of frames in
+    /// `0..=MAX_SKIP_SMOOTHING`.
     pub fn check(&self) -> Result<(), String> {
+        let width = |name: &str, s: f64| {
+            if (0.0..=MAX_SKIP_SMOOTHING).contains(&s) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{name} {s}: a width must be 0 to {MAX_SKIP_SMOOTHING} frames"
+                ))
+            }
+        };
+        width("root_rotation_smoothing", self.root_rotation_smoothing)?;
         if self.prediction != Prediction::LearnedSkip {
             return Ok(());
         }
@@ -129,16 +144,9 @@ impl DenoiserConfig {
                     .into(),
             );
         }
-        match self
-            .skip_smoothing
+        self.skip_smoothing
             .iter()
-            .find(|s| !(0.0..=MAX_SKIP_SMOOTHING).contains(*s))
-        {
-            Some(s) => Err(format!(
-                "skip_smoothing {s}: a width must be 0 to {MAX_SKIP_SMOOTHING} frames"
-            )),
-            None => Ok(()),
-        }
+            .try_for_each(|&s| width("skip_smoothing", s))
     }
 }
 
@@ -292,7 +300,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn skip_smoothing_widths_are_checked() {
+    fn smoothing_widths_are_checked() {
         let skip = |widths: Vec<f64>| DenoiserConfig {
             prediction: Prediction::LearnedSkip,
             skip_smoothing: widths,
@@ -309,5 +317,14 @@ mod tests {
             ..DenoiserConfig::default()
         };
         assert!(x0.check().is_ok());
+        for bad in [-1.0, f64::NAN, 1e30] {
+            let heading = DenoiserConfig {
+                heading_integrated: true,
+                root_rotation_smoothing: bad,
+                ..DenoiserConfig::default()
+            };
+            let e = heading.check().unwrap_err();
+            assert!(e.contains("root_rotation_smoothing"), "{bad}: {e}");
+        }
     }
 }

@@ -171,7 +171,9 @@ impl DenoiserConfig {
                     device,
                 )
             }),
-            heading_path: self.heading_integrated.then(|| HeadingPath::new(d, device)),
+            heading_path: self
+                .heading_integrated
+                .then(|| HeadingPath::new(d, self.root_rotation_smoothing, device)),
         }
     }
 }
