@@ -265,6 +265,7 @@ PHYSICAL_COLS = [
     ("max_step", "max_step (m)", 3),
     ("spikes", "spikes (count)", 1),
     ("leg_cross", "leg_cross (%)", 1),
+    ("lean", "lean (%)", 1),
     ("joint_speed", "joint_speed (m/s)", 3),
     ("pelvis_speed", "pelvis_speed (m/s)", 3),
     ("step_rate", "step_rate (1/s)", 2),
@@ -364,7 +365,8 @@ def physical_note(w, rates, sets=""):
       "(third time derivative of position) over joints and frames: jitter and pose jumps raise "
       "them. **max_step**: the largest single-frame move of any joint. **spikes**: frame steps "
       "in which some joint moves faster than 20 m/s (teleports, not movement). **leg_cross**: "
-      "share of frames with crossed shins. **joint_speed**: mean joint speed. "
+      "share of frames with crossed shins. **lean**: share of frames whose pelvis is more than "
+      "0.3 m (horizontally) from the midpoint of its ankles. **joint_speed**: mean joint speed. "
       "**pelvis_speed**: mean horizontal pelvis speed (travel over the floor). **step_rate**: "
       "foot steps of both feet per second (real salsa: 1.6–2.3). A set's value is the mean over "
       "its clips, except max_step (the largest of its clips) and spikes (their sum, so it grows "
