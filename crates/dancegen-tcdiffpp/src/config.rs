@@ -202,6 +202,13 @@ pub struct TrainingConfig {
     /// Share of windows trained without any clean root injection (issue #17: half), so one
     /// model makes free and controlled dances.
     pub control_drop: f64,
+    /// Our option, 0 (the paper's training) by default: the share of windows whose first half,
+    /// first frames, last frames or both ends are given clean in x_t, every channel of every
+    /// dancer, as the window-by-window sampler gives a window its prefix and an edit its kept
+    /// frames ([`crate::losses::draw_cued_frames`]). A network that reads its input never saw
+    /// clean frames beside noisy ones otherwise, and did not continue them
+    /// (docs/group-collapse.md §21).
+    pub cued_frames: f64,
 }
 
 impl Default for TrainingConfig {
@@ -209,6 +216,7 @@ impl Default for TrainingConfig {
         Self {
             cond_drop: 0.25,
             control_drop: 0.5,
+            cued_frames: 0.0,
         }
     }
 }

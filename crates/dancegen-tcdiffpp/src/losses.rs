@@ -16,6 +16,9 @@
 //! - ours, 0 by default: `λ_leg L_leg`, [`leg_crossing`] on x̂0's joints (`[model.loss]
 //!   leg_crossing`).
 //!
+//! Cued frames (ours, [`TrainingConfig::cued_frames`], off by default): some windows get a
+//! prefix or their ends clean in x_t, as the window-by-window sampler and edits give them.
+//!
 //! Formation control (issue #17, group.md §1 row 12 "Proposal"): with probability
 //! `1 − control_drop` a window trains controlled — each active dancer, with probability
 //! [`CONTROL_DANCER_PROB`], has its clean root x/y written into `x_t` (and the control flag
@@ -121,6 +124,34 @@ fn draw_control(dancers: &[usize], t: usize, drop: f64, rng: &mut SeededNoise) -
     c
 }
 
+/// Per window and frame (`[B, T]`, flat), 1 where the frame is given clean in x_t
+/// ([`TrainingConfig::cued_frames`]): with probability `share` a window gets, with equal odds,
+/// its first half (an LGDS prefix), its first `k` frames, its last `k` frames, or both (an
+/// edit's kept frames around a regenerated range), `k` uniform in `T/10..=T/2`.
+pub fn draw_cued_frames(b: usize, t: usize, share: f64, rng: &mut SeededNoise) -> Vec<f32> {
+    let mut c = vec![0f32; b * t];
+    if t < 4 {
+        return c;
+    }
+    for w in 0..b {
+        if rng.uniform() >= share {
+            continue;
+        }
+        let lo = (t / 10).max(1);
+        let k = lo + rng.below(t / 2 - lo + 1);
+        let (head, tail) = match rng.below(4) {
+            0 => (t / 2, 0),
+            1 => (k, 0),
+            2 => (0, k),
+            _ => (k.min(t / 3), k.min(t / 3)),
+        };
+        for f in (0..head).chain(t - tail..t) {
+            c[w * t + f] = 1.0;
+        }
+    }
+    c
+}
+
 /// The control flags as `[B, T, N_MAX]` and as a channel mask over the root x/y of
 /// `[B, T, N_MAX·151]`.
 pub fn control_tensors(
@@ -167,6 +198,13 @@ pub fn group_loss(
         .collect();
     let noise = rng.tensor([b, t, GROUP_DIMS], &device);
     let x_t = schedule.q_sample(x0.clone(), &steps, noise) * chmask.clone();
+    let cmask = if training.cued_frames > 0.0 {
+        let cued = draw_cued_frames(b, t, training.cued_frames, &mut rng);
+        let cued = Tensor::<3>::from_data(TensorData::new(cued, [b, t, 1]), &device);
+        (cmask + cued).clamp(0.0, 1.0) * chmask.clone()
+    } else {
+        cmask
+    };
     let x_t = x0.clone() * cmask.clone() + x_t * (cmask.neg() + 1.0);
     let cond = GroupCond {
         music: batch.music.clone(),
@@ -299,6 +337,31 @@ pub fn distance_consistency(pred: Tensor<3>, gt: Tensor<3>, dancers: &[usize]) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cued_frames_are_a_prefix_or_the_ends_of_some_windows() {
+        let (b, t) = (400, 150);
+        let mut rng = SeededNoise::new(5);
+        let c = draw_cued_frames(b, t, 0.5, &mut rng);
+        let mut cued_windows = 0;
+        for w in 0..b {
+            let row = &c[w * t..(w + 1) * t];
+            let head = row.iter().take_while(|&&v| v > 0.0).count();
+            let tail = row.iter().rev().take_while(|&&v| v > 0.0).count();
+            let total = row.iter().filter(|&&v| v > 0.0).count();
+            assert!(
+                head + tail >= total && head <= t / 2 && tail <= t / 2,
+                "window {w}"
+            );
+            cued_windows += usize::from(total > 0);
+        }
+        assert!((150..250).contains(&cued_windows), "{cued_windows} of {b}");
+        assert!(
+            draw_cued_frames(3, t, 0.0, &mut rng)
+                .iter()
+                .all(|&v| v == 0.0)
+        );
+    }
 
     #[test]
     fn snr_weights_are_one_at_pure_noise_and_capped_near_the_data() {
