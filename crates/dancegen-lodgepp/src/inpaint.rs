@@ -852,6 +852,66 @@ mod tests {
         assert!(worst < 1e-6, "a root step of {worst} m: {x:?}");
     }
 
+    /// One standing frame: every contact label on, the root 0.9 m up, every joint at rest but
+    /// the left knee (SMPL 4), bent `bend` rad about x.
+    fn standing(bend: f32) -> Vec<f32> {
+        let mut f = vec![0f32; DIMS];
+        f[..4].fill(1.0);
+        f[ROOT_HEIGHT] = 0.9;
+        for j in 0..24 {
+            let (c, s) = if j == 4 {
+                (bend.cos(), bend.sin())
+            } else {
+                (1.0, 0.0)
+            };
+            let at = dancegen_nn::edge151::rot6d(j, 0);
+            f[at..at + 6].copy_from_slice(&[1.0, 0.0, 0.0, 0.0, c, -s]);
+        }
+        f
+    }
+
+    #[test]
+    fn the_leg_ik_fades_in_from_the_kept_frames() {
+        // Kept: frames 0..20 and 40..60 standing straight, feet planted. Made: the same with
+        // the left knee bent, so its planted foot is elsewhere. The IK pins the made frames'
+        // planted foot where the kept frames have it, but from nothing at the run's first and
+        // last frames: a leg that jumped there in one frame was a spike of jerk at the join.
+        let t = 60;
+        let generated: Vec<f32> = (0..t).flat_map(|_| standing(0.4)).collect();
+        let mut values = generated.clone();
+        let mut mask = vec![0f32; t * DIMS];
+        for f in (0..20).chain(40..60) {
+            values[f * DIMS..(f + 1) * DIMS].copy_from_slice(&standing(0.0));
+            mask[f * DIMS..(f + 1) * DIMS].fill(1.0);
+        }
+        let known = KnownFrames { values, mask };
+        let lock = FootLock {
+            root: false,
+            ik: true,
+            rule: crate::planted_feet::PlantedRule::Either,
+        };
+        let (plain, _) = join_made_runs(&generated, &known, None);
+        let (locked, _) = join_made_runs(&generated, &known, Some(lock));
+        let frame = |x: &[f32], f: usize| x[f * DIMS..(f + 1) * DIMS].to_vec();
+        for f in [20, 39] {
+            assert_eq!(frame(&locked, f), frame(&plain, f), "frame {f}");
+        }
+        let moved = |f: usize| {
+            frame(&locked, f)
+                .iter()
+                .zip(frame(&plain, f))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0f32, f32::max)
+        };
+        assert!(moved(30) > 1e-3, "the IK pins the planted foot mid-run");
+        assert!(
+            moved(21) < moved(25),
+            "and fades in: {} then {}",
+            moved(21),
+            moved(25)
+        );
+    }
+
     #[test]
     fn the_root_is_handed_over_with_its_velocity_and_acceleration() {
         // Kept: frames 0..10 accelerate along x (x = 0.001 f²); made: 10..60 at rest at the
