@@ -211,6 +211,22 @@ pub struct TrainingConfig {
     pub cued_frames: f64,
 }
 
+impl TrainingConfig {
+    /// What deserialising cannot check: every share a probability in `0..=1`.
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("cond_drop", self.cond_drop),
+            ("control_drop", self.control_drop),
+            ("cued_frames", self.cued_frames),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("{name} {v}: a share must be 0 to 1"));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for TrainingConfig {
     fn default() -> Self {
         Self {
@@ -333,6 +349,19 @@ mod tests {
             };
             let e = heading.check().unwrap_err();
             assert!(e.contains("root_rotation_smoothing"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn training_shares_are_checked() {
+        assert!(TrainingConfig::default().check().is_ok());
+        for bad in [-0.1, 1.5, f64::NAN] {
+            let t = TrainingConfig {
+                cued_frames: bad,
+                ..TrainingConfig::default()
+            };
+            let e = t.check().unwrap_err();
+            assert!(e.contains("cued_frames"), "{bad}: {e}");
         }
     }
 }

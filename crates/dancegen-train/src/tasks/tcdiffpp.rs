@@ -86,6 +86,9 @@ impl GroupTask {
         cfg.denoiser
             .check()
             .map_err(|e| format!("[model.denoiser] {e}"))?;
+        cfg.training
+            .check()
+            .map_err(|e| format!("[model.training] {e}"))?;
         if config.data.window != cfg.window() {
             return Err(format!(
                 "[data] window = {} but the model's window is {} frames",
