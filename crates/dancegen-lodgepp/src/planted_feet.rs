@@ -87,6 +87,18 @@ pub fn pin_planted_feet(frames: &mut [f32]) -> FootIkReport {
 
 /// [`pin_planted_feet`] with a chosen [`PlantedRule`].
 pub fn pin_planted_feet_with(frames: &mut [f32], rule: PlantedRule) -> FootIkReport {
+    pin_planted_feet_within(frames, rule, f64::INFINITY)
+}
+
+/// [`pin_planted_feet_with`] that leaves alone a contact run whose ankle or toe strays more
+/// than `max_travel_m` from the run's mean place (a step or slide the contact label calls a
+/// plant; pinning it bends the leg far from where the network put it and back within the
+/// IK's blend).
+pub fn pin_planted_feet_within(
+    frames: &mut [f32],
+    rule: PlantedRule,
+    max_travel_m: f64,
+) -> FootIkReport {
     let Some((_, contact)) = feet_and_contacts(frames, rule) else {
         return FootIkReport::default();
     };
@@ -131,6 +143,7 @@ pub fn pin_planted_feet_with(frames: &mut [f32], rule: PlantedRule) -> FootIkRep
         &SMPL_LEGS,
         &contacts,
         IK_BLEND_FRAMES,
+        max_travel_m,
     );
     let changed: Vec<usize> = SMPL_LEGS
         .iter()

@@ -70,6 +70,7 @@ pub fn pin_planted_feet(
     legs: &[Leg],
     contacts: &[LegContacts],
     blend_frames: usize,
+    max_travel_m: f64,
 ) -> FootIkReport {
     let j = skeleton.len();
     let t = root.len();
@@ -82,8 +83,12 @@ pub fn pin_planted_feet(
             "one contact per frame"
         );
         let world = Pose::all(skeleton, local, root);
-        let ankle_pins = Pins::new(&c.ankle, blend_frames, |f| world[f].pos[leg.ankle]);
-        let toe_pins = Pins::new(&c.toe, blend_frames, |f| world[f].pos[leg.toe]);
+        let ankle_pins = Pins::new(&c.ankle, blend_frames, max_travel_m, |f| {
+            world[f].pos[leg.ankle]
+        });
+        let toe_pins = Pins::new(&c.toe, blend_frames, max_travel_m, |f| {
+            world[f].pos[leg.toe]
+        });
         let toe_offset = skeleton.offsets()[leg.toe];
         for (f, pose) in world.iter().enumerate() {
             let (wa, pa) = ankle_pins.at(f);
@@ -149,10 +154,19 @@ struct Pins {
 }
 
 impl Pins {
-    fn new(planted: &[bool], blend: usize, pos: impl Fn(usize) -> [f64; 3]) -> Pins {
+    /// A run of planted frames `[start, end)` is pinned to the joint's mean place in it,
+    /// unless the joint strays more than `max_travel` from that place. Around each run the
+    /// weight ramps over `blend` frames; where two runs' ramps meet, the target moves from
+    /// the one run's place to the other's across the frames between them (taking the nearer
+    /// run's place jumped the foot from one to the other in a single frame).
+    fn new(
+        planted: &[bool],
+        blend: usize,
+        max_travel: f64,
+        pos: impl Fn(usize) -> [f64; 3],
+    ) -> Pins {
         let t = planted.len();
-        let mut weight = vec![0.0; t];
-        let mut target = vec![[0.0; 3]; t];
+        let mut runs: Vec<(usize, usize, [f64; 3])> = Vec::new();
         let mut f = 0;
         while f < t {
             if !planted[f] {
@@ -169,22 +183,48 @@ impl Pins {
                 mean = add(mean, pos(g));
             }
             let mean = scale(mean, 1.0 / (end - start) as f64);
-            let lo = start.saturating_sub(blend);
-            let hi = (end + blend).min(t);
-            for g in lo..hi {
-                let dist = if g < start {
-                    start - g
-                } else {
-                    (g + 1).saturating_sub(end)
-                };
-                // Raised cosine: 1 in the run, falling to 0 at `blend + 1` frames away.
-                let w =
-                    0.5 * (1.0 + (std::f64::consts::PI * dist as f64 / (blend + 1) as f64).cos());
-                if w > weight[g] {
-                    weight[g] = w;
-                    target[g] = mean;
-                }
+            let travel = (start..end)
+                .map(|g| norm(sub(pos(g), mean)))
+                .fold(0.0, f64::max);
+            // A joint that goes somewhere in the run makes a step or a slide, not a plant.
+            if travel <= max_travel {
+                runs.push((start, end, mean));
             }
+        }
+        // Raised cosine: 1 in the run, falling to 0 at `blend + 1` frames away.
+        let ramp = |dist: usize| {
+            if dist > blend {
+                0.0
+            } else {
+                0.5 * (1.0 + (std::f64::consts::PI * dist as f64 / (blend + 1) as f64).cos())
+            }
+        };
+        let mut weight = vec![0.0; t];
+        let mut target = vec![[0.0; 3]; t];
+        // `next`: the first run that ends after frame g.
+        let mut next = 0;
+        for g in 0..t {
+            while next < runs.len() && runs[next].1 <= g {
+                next += 1;
+            }
+            if let Some(&(_, _, m)) = runs.get(next).filter(|r| r.0 <= g) {
+                weight[g] = 1.0;
+                target[g] = m;
+                continue;
+            }
+            let before = next.checked_sub(1).map(|i| runs[i]);
+            let after = runs.get(next).copied();
+            let w_before = before.map_or(0.0, |(_, e, _)| ramp(g + 1 - e));
+            let w_after = after.map_or(0.0, |(s, _, _)| ramp(s - g));
+            weight[g] = w_before.max(w_after);
+            target[g] = match (before, after) {
+                (Some((_, e, a)), Some((s, _, b))) if w_before > 0.0 && w_after > 0.0 => {
+                    lerp(a, b, (g + 1 - e) as f64 / (s + 1 - e) as f64)
+                }
+                (Some((_, _, a)), _) if w_before > 0.0 => a,
+                (_, Some((_, _, b))) => b,
+                _ => [0.0; 3],
+            };
         }
         Pins { weight, target }
     }
@@ -292,7 +332,15 @@ mod tests {
                 toe: vec![false; t],
             },
         ];
-        let report = pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 4);
+        let report = pin_planted_feet(
+            &skel,
+            &mut local,
+            &root,
+            &SMPL_LEGS,
+            &contacts,
+            4,
+            f64::INFINITY,
+        );
         assert_eq!(report.adjusted, t);
         assert_eq!(report.max_unreached_m, 0.0);
         let after = positions(&skel, &local, &root);
@@ -330,7 +378,15 @@ mod tests {
                 toe: vec![false; t],
             },
         ];
-        pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 4);
+        pin_planted_feet(
+            &skel,
+            &mut local,
+            &root,
+            &SMPL_LEGS,
+            &contacts,
+            4,
+            f64::INFINITY,
+        );
         let after = positions(&skel, &local, &root);
         let moved: Vec<f64> = (0..t)
             .map(|f| norm(sub(after[f].pos[7], before[f].pos[7])))
@@ -346,6 +402,68 @@ mod tests {
             // The free foot moves 1 cm per frame with the glide; over the 4-frame ramp it also
             // covers the gap to the pin (~4.5 cm at the run's start): 3 cm per frame at most.
             assert!(step < 0.03, "frame {f}: the ankle jumps {step} m");
+        }
+    }
+
+    /// Left leg planted (ankle and toe) on the frames `planted` of a [`gliding`] clip.
+    fn left_planted(planted: Vec<bool>) -> Vec<LegContacts> {
+        let t = planted.len();
+        vec![
+            LegContacts {
+                ankle: planted.clone(),
+                toe: planted,
+            },
+            LegContacts {
+                ankle: vec![false; t],
+                toe: vec![false; t],
+            },
+        ]
+    }
+
+    #[test]
+    fn two_runs_one_frame_apart_hand_over_their_places_across_the_gap() {
+        // Planted on 0-9 and 11-20 of a foot gliding 1 cm per frame: the two pins are 11 cm
+        // apart. Taking the nearer run's place in the gap frame jumped the foot 11 cm in one
+        // frame; moving the target across the gap takes two frames for it.
+        let t = 21;
+        let (skel, mut local, root) = gliding(t);
+        let contacts = left_planted((0..t).map(|f| f != 10).collect());
+        pin_planted_feet(
+            &skel,
+            &mut local,
+            &root,
+            &SMPL_LEGS,
+            &contacts,
+            4,
+            f64::INFINITY,
+        );
+        let after = positions(&skel, &local, &root);
+        let apart = norm(sub(after[20].pos[7], after[0].pos[7]));
+        assert!((apart - 0.11).abs() < 1e-3, "pins {apart} m apart");
+        for f in 1..t {
+            let step = norm(sub(after[f].pos[7], after[f - 1].pos[7]));
+            assert!(step < 0.6 * apart, "frame {f}: the ankle jumps {step} m");
+        }
+    }
+
+    #[test]
+    fn a_run_whose_foot_travels_is_left_alone() {
+        // Planted throughout while gliding 1 cm per frame over 20 frames: the ankle strays up
+        // to ~10 cm from its mean place. Bound 5 cm: not a plant, untouched; bound 20 cm:
+        // pinned.
+        let t = 20;
+        let (skel, local, root) = gliding(t);
+        let before = positions(&skel, &local, &root);
+        let contacts = left_planted(vec![true; t]);
+        for (bound, pinned) in [(0.05, false), (0.2, true)] {
+            let mut l = local.clone();
+            pin_planted_feet(&skel, &mut l, &root, &SMPL_LEGS, &contacts, 4, bound);
+            let after = positions(&skel, &l, &root);
+            let moved = (0..t)
+                .map(|f| norm(sub(after[f].pos[7], before[f].pos[7])))
+                .fold(0.0, f64::max);
+            assert_eq!(moved > 0.05, pinned, "bound {bound}: moved {moved} m");
+            assert_eq!(moved == 0.0, !pinned, "bound {bound}: moved {moved} m");
         }
     }
 
@@ -366,7 +484,15 @@ mod tests {
                 toe: vec![false; t],
             },
         ];
-        let report = pin_planted_feet(&skel, &mut local, &root, &SMPL_LEGS, &contacts, 2);
+        let report = pin_planted_feet(
+            &skel,
+            &mut local,
+            &root,
+            &SMPL_LEGS,
+            &contacts,
+            2,
+            f64::INFINITY,
+        );
         assert!(report.max_unreached_m > 0.1);
         assert!(
             local
