@@ -264,6 +264,7 @@ impl SoloModel {
                 root: true,
                 ik: opts.foot_ik,
                 rule: opts.foot_lock_rule,
+                max_travel_m: f64::INFINITY,
             };
             lock_feet_in_runs(&mut buf, known, &runs, lock);
         }
@@ -286,6 +287,9 @@ pub struct FootLock {
     pub root: bool,
     pub ik: bool,
     pub rule: crate::planted_feet::PlantedRule,
+    /// The IK leaves a contact run alone whose foot strays farther than this (metres;
+    /// [`crate::planted_feet::pin_planted_feet_within`]); `f64::INFINITY`: no bound.
+    pub max_travel_m: f64,
 }
 
 /// Known frames on each side of a made run that [`join_made_runs`] blends it into.
@@ -531,7 +535,7 @@ fn lock_feet_in_runs(buf: &mut [f32], known: &KnownFrames, runs: &[Run], lock: F
         // frames' legs are not changed.
         if lock.ik {
             let mut seg = buf[lo * DIMS..hi * DIMS].to_vec();
-            crate::planted_feet::pin_planted_feet_with(&mut seg, lock.rule);
+            crate::planted_feet::pin_planted_feet_within(&mut seg, lock.rule, lock.max_travel_m);
             for g in a..b {
                 let from_kept = [(a > 0).then(|| g - a), (b < total).then(|| b - 1 - g)]
                     .into_iter()
@@ -889,6 +893,7 @@ mod tests {
             root: false,
             ik: true,
             rule: crate::planted_feet::PlantedRule::Either,
+            max_travel_m: f64::INFINITY,
         };
         let (plain, _) = join_made_runs(&generated, &known, None);
         let (locked, _) = join_made_runs(&generated, &known, Some(lock));

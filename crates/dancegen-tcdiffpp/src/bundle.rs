@@ -83,6 +83,11 @@ impl GroupModel {
             .denoiser
             .check()
             .map_err(|e| invalid(&p, format!("[model.denoiser] {e}")))?;
+        config
+            .model
+            .sampling
+            .check()
+            .map_err(|e| invalid(&p, format!("[model.sampling] {e}")))?;
         let w = config.model.window();
         if w < 2 || !w.is_multiple_of(2) {
             return Err(invalid(

@@ -7,6 +7,7 @@
 //! Every ablation of the paper's Table 4 is a switch here.
 
 use dancegen_nn::diffusion::Spacing;
+use dancegen_refine::foot_lock::PlantedRule;
 use serde::{Deserialize, Serialize};
 
 use crate::prediction::Prediction;
@@ -271,6 +272,21 @@ pub struct SamplingConfig {
     pub guidance: f64,
     pub sampler: LongSampler,
     pub prefix: PrefixMode,
+    /// When a dancer's foot counts as planted for the foot lock (post-processing, not part of
+    /// TCDiff++; `dancegen_lodgepp::planted_feet`). Absent in older bundles: `either`, as they
+    /// were tuned with.
+    pub foot_lock_rule: PlantedRule,
+    /// The foot lock's leg IK on planted feet; `false` keeps the root lock only (dancers with
+    /// a requested path get no root lock, so nothing). Absent in older bundles: `true`.
+    pub foot_ik: bool,
+    /// The leg IK leaves alone a contact run whose foot strays more than this (metres) from
+    /// the run's mean place (`dancegen_lodgepp::planted_feet::pin_planted_feet_within`).
+    /// Absent in older bundles: no bound.
+    pub foot_ik_max_travel_m: Option<f64>,
+    /// Time constant (frames) of a leash on the root lock: a removed glide is given back over
+    /// about this long, so a dancer keeps the place the network gives it in the group
+    /// (`dancegen_lodgepp::planted_feet::lock_planted_feet_leashed`). Absent: no leash.
+    pub foot_lock_leash_frames: Option<f64>,
 }
 
 impl Default for SamplingConfig {
@@ -289,7 +305,29 @@ impl Default for SamplingConfig {
             // and root steps up to 0.7 m (free dances), the parallel sampler 1.2 and 0.17 m.
             sampler: LongSampler::Parallel,
             prefix: PrefixMode::Clean,
+            foot_lock_rule: PlantedRule::Either,
+            foot_ik: true,
+            foot_ik_max_travel_m: None,
+            foot_lock_leash_frames: None,
         }
+    }
+}
+
+impl SamplingConfig {
+    /// What deserialising cannot check: the foot lock's travel bound and leash are positive
+    /// lengths (metres, frames).
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("foot_ik_max_travel_m", self.foot_ik_max_travel_m),
+            ("foot_lock_leash_frames", self.foot_lock_leash_frames),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return Err(format!("{name} {v}: must be a positive number"));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -349,6 +387,29 @@ mod tests {
             };
             let e = heading.check().unwrap_err();
             assert!(e.contains("root_rotation_smoothing"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn foot_lock_lengths_are_checked() {
+        assert!(SamplingConfig::default().check().is_ok());
+        for (travel, leash) in [
+            (Some(0.0), None),
+            (None, Some(-3.0)),
+            (Some(f64::NAN), None),
+        ] {
+            let s = SamplingConfig {
+                foot_ik_max_travel_m: travel,
+                foot_lock_leash_frames: leash,
+                ..SamplingConfig::default()
+            };
+            let e = s.check().unwrap_err();
+            let name = if travel.is_some() {
+                "foot_ik_max_travel_m"
+            } else {
+                "foot_lock_leash_frames"
+            };
+            assert!(e.contains(name), "{e}");
         }
     }
 

@@ -3,15 +3,15 @@
 //!
 //! The model samples every dancer at once ([`dancegen_tcdiffpp::sampler::generate`]: LGDS or
 //! the parallel long-form sampler, formation paths injected as clean roots). Then, per dancer,
-//! the solo system's planted-feet pass (`dancegen_lodgepp::planted_feet`: leg IK always; the
-//! root lock only for a dancer no formation constrains, since it would move the root off its
-//! requested path), one shared floor, and the couple separation extended to the group
+//! the solo system's planted-feet pass (`dancegen_lodgepp::planted_feet`, with the bundle's
+//! `sampling.foot_lock_rule`: leg IK unless `sampling.foot_ik` is off; the root lock only for a
+//! dancer no formation constrains, since it would move the root off its requested path), one shared floor, and the couple separation extended to the group
 //! ([`group_separation_offsets`]). `--unison` gives every dancer the body motion of the
 //! leftmost one (post-processing, not part of TCDiff++), each on its own path.
 
 use std::path::Path;
 
-use dancegen_lodgepp::planted_feet::{clean_planted_feet, pin_planted_feet};
+use dancegen_lodgepp::planted_feet::{lock_planted_feet_leashed, pin_planted_feet_within};
 use dancegen_motion::repr::motion::POSE_DIMS;
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
@@ -156,10 +156,14 @@ impl DanceSystem for Group {
                 let constrained = requested
                     .as_ref()
                     .is_some_and(|r| r[s].iter().any(Option::is_some));
-                if constrained {
-                    pin_planted_feet(&mut own);
-                } else {
-                    clean_planted_feet(&mut own);
+                let sampling = &model.config.model.sampling;
+                let rule = sampling.foot_lock_rule;
+                if !constrained {
+                    lock_planted_feet_leashed(&mut own, rule, sampling.foot_lock_leash_frames);
+                }
+                if sampling.foot_ik {
+                    let travel = sampling.foot_ik_max_travel_m.unwrap_or(f64::INFINITY);
+                    pin_planted_feet_within(&mut own, rule, travel);
                 }
             }
             dancers

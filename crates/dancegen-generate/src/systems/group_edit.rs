@@ -11,7 +11,6 @@
 //! would replace the kept dancers' own moves.
 
 use dancegen_lodgepp::inpaint::{FootLock, KnownFrames, join_made_runs};
-use dancegen_lodgepp::planted_feet::PlantedRule;
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_tcdiffpp::bundle::GroupModel;
 use dancegen_tcdiffpp::known::GroupKnown;
@@ -107,8 +106,14 @@ pub(super) fn edit(
             .is_some_and(|r| r[k].iter().any(Option::is_some));
         let lock = opts.foot_lock.then_some(FootLock {
             root: !placed,
-            ik: true,
-            rule: PlantedRule::Either,
+            ik: model.config.model.sampling.foot_ik,
+            rule: model.config.model.sampling.foot_lock_rule,
+            max_travel_m: model
+                .config
+                .model
+                .sampling
+                .foot_ik_max_travel_m
+                .unwrap_or(f64::INFINITY),
         });
         let (joined, largest) = join_made_runs(&generated, known, lock);
         largest_join = largest_join.max(largest);

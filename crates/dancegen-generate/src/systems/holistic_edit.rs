@@ -137,6 +137,7 @@ pub(super) fn edit(
         root: true,
         ik: model.config.sampling.foot_ik,
         rule: PlantedRule::Either,
+        max_travel_m: f64::INFINITY,
     });
     let (joined, largest) = join_made_runs(&generated, &KnownFrames { values, mask }, lock);
     let mut body = Edge151::decode(&joined).map_err(|e| gen_err(&e))?;
