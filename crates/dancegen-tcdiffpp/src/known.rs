@@ -48,6 +48,11 @@ impl GroupKnown<'_> {
         (0..n * DIMS).all(|i| self.is_known(f, i))
     }
 
+    /// Some channel of dancer `d` known at frame `f`.
+    pub fn any_known(&self, f: usize, d: usize) -> bool {
+        (0..DIMS).any(|c| self.is_known(f, channel(d, c)))
+    }
+
     /// Dancer `d`'s root x/y known at frame `f`.
     pub fn root_known(&self, f: usize, d: usize) -> bool {
         ROOT_HORIZONTAL

@@ -325,11 +325,17 @@ fn lgds(
     let identity: Vec<usize> = (0..n).collect();
     for w in 0..windows {
         let start = w * half;
-        let made = if w == 0 { 0 } else { half };
+        let made = if w == 0 {
+            0
+        } else {
+            req.known
+                .map_or(half, |k| seam_before_known(&k, start, half, req.frames, n))
+        };
         if let Some(k) = &req.known
             && (start + made..start + window).all(|g| g >= req.frames || k.frame_known(g, n))
         {
             // Nothing to make: the known frames, normalised, as a sampled window would give.
+            out.truncate((start + made) * GROUP_DIMS);
             for g in start + made..start + window {
                 out.extend(k.normalised(g.min(req.frames - 1), n, &scale, &shift));
             }
@@ -345,8 +351,10 @@ fn lgds(
                 None => (identity.clone(), first_origin(req, &scale), None),
             }
         } else {
-            let placed = out.len() / GROUP_DIMS;
-            let tail = &out[(placed - half) * GROUP_DIMS..];
+            // The window's prefix: the frames before what it makes (all of the previous
+            // window's second half, or less before a known frame, [`seam_before_known`]).
+            out.truncate((start + made) * GROUP_DIMS);
+            let tail = &out[start * GROUP_DIMS..];
             let perm = sorted_slots(&tail[..GROUP_DIMS], n);
             let origin = centroid(&tail[..GROUP_DIMS], n);
             let mut p = permute(tail, &perm, false);
@@ -379,7 +387,7 @@ fn lgds(
             let mut value = p.clone();
             value.resize(window * GROUP_DIMS, 0.0);
             let mut mask = vec![0f32; window * GROUP_DIMS];
-            for f in 0..half {
+            for f in 0..made {
                 for s in 0..n {
                     for c in 0..DIMS {
                         mask[f * GROUP_DIMS + channel(s, c)] = 1.0;
@@ -442,6 +450,30 @@ fn lgds(
     }
     denormalise(&mut out, &scale, &shift, n);
     Ok(out)
+}
+
+/// Frames between an LGDS seam and a known frame after it that the window making that frame
+/// also makes (2/3 s at 30 fps). A keyframe just after a seam was seen only by the window that
+/// starts there, which had to bend the dance to it within a few frames of the previous
+/// window's frames: with the x0-skip network (tcdiffpp v15) a keyframe at a seam jerked 2.4
+/// times as much in the frames around it as elsewhere (feelings.ogg 30-54 s, 3 dancers).
+pub const KNOWN_LEAD_FRAMES: usize = 20;
+
+/// How many of its first frames an LGDS window `start..start + 2·half` takes from the
+/// previous window (`half`, the paper's), fewer when a frame with a known channel comes within
+/// [`KNOWN_LEAD_FRAMES`] after the seam and the frame before the seam has none (a keyframe, or
+/// the kept frames after a remade range, not joints kept all through): then the seam moves to
+/// that many frames before it, so the window that sees the known frame also makes the approach.
+fn seam_before_known(k: &GroupKnown, start: usize, half: usize, frames: usize, n: usize) -> usize {
+    let seam = start + half;
+    let any_known = |g: usize| g < frames && (0..n).any(|d| k.any_known(g, d));
+    if seam == 0 || seam >= frames || any_known(seam - 1) {
+        return half;
+    }
+    match (seam..seam + KNOWN_LEAD_FRAMES).find(|&g| any_known(g)) {
+        Some(g) => half - (KNOWN_LEAD_FRAMES - (g - seam)).min(half - 1),
+        None => half,
+    }
 }
 
 /// Continues each free dancer's root across an LGDS window's seam: its made frames
@@ -641,4 +673,57 @@ fn parallel(
         .expect("f32");
     denormalise(&mut out, &[1.0; GROUP_DIMS], &[0.0; GROUP_DIMS], n);
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mask over `frames` frames of 2 dancers: `known(f)` gives the channels of dancer 0
+    /// known at frame f.
+    fn mask(frames: usize, known: impl Fn(usize) -> std::ops::Range<usize>) -> Vec<f32> {
+        let mut m = vec![0f32; frames * GROUP_DIMS];
+        for f in 0..frames {
+            for c in known(f) {
+                m[f * GROUP_DIMS + channel(0, c)] = 1.0;
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn a_seam_moves_before_a_known_frame_just_after_it() {
+        let (frames, half, start) = (450, 75, 150);
+        let seam = start + half;
+        let values = vec![0f32; frames * GROUP_DIMS];
+        let made = |m: &[f32]| {
+            let k = GroupKnown {
+                values: &values,
+                mask: m,
+            };
+            seam_before_known(&k, start, half, frames, 2)
+        };
+        // A keyframe at the seam or a few frames after it: the window starts making
+        // KNOWN_LEAD_FRAMES before it.
+        for after in [0, 5, KNOWN_LEAD_FRAMES - 1] {
+            let m = mask(frames, |f| if f == seam + after { 0..DIMS } else { 0..0 });
+            assert_eq!(
+                made(&m),
+                half - (KNOWN_LEAD_FRAMES - after),
+                "after {after}"
+            );
+        }
+        // Farther away, none at all, or joints known all through (kept arms): the paper's
+        // half.
+        let far = mask(frames, |f| {
+            if f == seam + KNOWN_LEAD_FRAMES {
+                0..DIMS
+            } else {
+                0..0
+            }
+        });
+        assert_eq!(made(&far), half);
+        assert_eq!(made(&mask(frames, |_| 0..0)), half);
+        assert_eq!(made(&mask(frames, |_| ROT6D_START..ROT6D_START + 6)), half);
+    }
 }
