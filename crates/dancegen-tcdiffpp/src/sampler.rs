@@ -479,8 +479,11 @@ fn seam_before_known(k: &GroupKnown, start: usize, half: usize, frames: usize, n
 /// Continues each free dancer's root across an LGDS window's seam: its made frames
 /// `made..window` of `x` (normalised, window coordinates, `[W, N_MAX·151]`) are shifted so that
 /// the first of them follows the prefix's last with the made part's own first step (no jump,
-/// no change of velocity at the seam). A dancer with a cued root on any made frame (a
-/// formation, an edit's known root) is left as cued.
+/// no change of velocity at the seam). A dancer with a cued root on a made frame (a formation,
+/// an edit's known root) gets that shift only before its first cued frame, fading to none
+/// there, so the cued roots stay as cued; with a cue on the first two made frames, nothing.
+/// (Left wholly as it was, a group edit whose remade range ends in kept frames jumped a dancer
+/// 0.2-0.32 m at the seam before them with tcdiffpp v15: feelings.ogg 30-54 s, 8-14 s remade.)
 ///
 /// Why: the prefix is imposed on the window's first half, but the network places the made
 /// frames' root itself (with `root_integrated`, at the window mean of its own root output), and
@@ -499,16 +502,22 @@ fn continue_free_roots(
     }
     for s in 0..n {
         let idx = |f: usize, ch: usize| f * GROUP_DIMS + channel(s, ch);
-        let any_cue = (made..window).any(|f| ROOT_HORIZONTAL.iter().any(|&ch| cued(idx(f, ch))));
-        if any_cue {
+        let first_cue =
+            (made..window).find(|&f| ROOT_HORIZONTAL.iter().any(|&ch| cued(idx(f, ch))));
+        if first_cue.is_some_and(|c| c <= made + 1) {
             continue;
         }
+        let weight = |f: usize| match first_cue {
+            None => 1.0,
+            Some(c) if f < c => (c - f) as f32 / (c - made) as f32,
+            Some(_) => 0.0,
+        };
         for &ch in &ROOT_HORIZONTAL {
             let (last, first, next) =
                 (x[idx(made - 1, ch)], x[idx(made, ch)], x[idx(made + 1, ch)]);
             let shift = last + (next - first) - first;
             for f in made..window {
-                x[idx(f, ch)] += shift;
+                x[idx(f, ch)] += shift * weight(f);
             }
         }
     }
@@ -689,6 +698,34 @@ mod tests {
             }
         }
         m
+    }
+
+    #[test]
+    fn a_made_root_continues_the_prefix_and_fades_into_a_cued_one() {
+        // One dancer standing at x = 0 in the prefix (frames 0-9); the made frames (10-29) stand
+        // at x = 1, and frame 20's root is cued there.
+        let (window, made) = (30, 10);
+        let x_ch = channel(0, ROOT_HORIZONTAL[0]);
+        let mut x = vec![0f32; window * GROUP_DIMS];
+        for f in made..window {
+            x[f * GROUP_DIMS + x_ch] = 1.0;
+        }
+        let cue = |i: usize| i == 20 * GROUP_DIMS + x_ch;
+        continue_free_roots(&mut x, window, made, 1, &cue);
+        let root: Vec<f32> = (0..window).map(|f| x[f * GROUP_DIMS + x_ch]).collect();
+        assert_eq!(root[made], 0.0, "{root:?}");
+        for f in made..20 {
+            // A straight approach: 0.1 per frame, no jump at the seam.
+            assert!((root[f + 1] - root[f] - 0.1).abs() < 1e-6, "{root:?}");
+        }
+        assert!(root[20..].iter().all(|&r| r == 1.0), "{root:?}");
+        // Uncued, the whole made part moves onto the prefix.
+        let mut y = vec![0f32; window * GROUP_DIMS];
+        for f in made..window {
+            y[f * GROUP_DIMS + x_ch] = 1.0;
+        }
+        continue_free_roots(&mut y, window, made, 1, &|_| false);
+        assert!((0..window).all(|f| y[f * GROUP_DIMS + x_ch] == 0.0));
     }
 
     #[test]
