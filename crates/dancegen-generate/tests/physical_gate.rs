@@ -267,25 +267,16 @@ fn group_gate(n: usize) {
 }
 
 #[test]
-#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 2 dancers, is not plausible yet: \
-            too few steps (step rate 0.16 and 0.04 against at least 0.33; jerk, floor and shins \
-            pass); run with --ignored to see its figures"]
 fn group_tcdiffpp_small_is_plausible_for_2_dancers() {
     group_gate(2);
 }
 
 #[test]
-#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 3 dancers, is not plausible yet: \
-            too few steps (step rate 0-0.13 against at least 0.33; jerk, floor and shins pass); \
-            run with --ignored to see its figures"]
 fn group_tcdiffpp_small_is_plausible_for_3_dancers() {
     group_gate(3);
 }
 
 #[test]
-#[ignore = "issue 43 (group dancers that dance): tcdiffpp-small, 5 dancers, is not plausible yet: \
-            too few steps (step rate 0.18-0.29 for 4 of 5 dancers against at least 0.33; jerk, \
-            floor and shins pass); run with --ignored to see its figures"]
 fn group_tcdiffpp_small_is_plausible_for_5_dancers() {
     group_gate(5);
 }
