@@ -283,10 +283,28 @@ pub struct SamplingConfig {
     /// the run's mean place (`dancegen_lodgepp::planted_feet::pin_planted_feet_within`).
     /// Absent in older bundles: no bound.
     pub foot_ik_max_travel_m: Option<f64>,
+    /// [`SamplingConfig::foot_ik_max_travel_m`] for a dancer on a requested path (a
+    /// formation): its root is dragged along the path while its legs do not walk it, so its
+    /// planted feet travel further. Absent: the same bound as a free dancer's.
+    pub foot_ik_max_travel_on_path_m: Option<f64>,
     /// Time constant (frames) of a leash on the root lock: a removed glide is given back over
     /// about this long, so a dancer keeps the place the network gives it in the group
     /// (`dancegen_lodgepp::planted_feet::lock_planted_feet_leashed`). Absent: no leash.
     pub foot_lock_leash_frames: Option<f64>,
+}
+
+impl SamplingConfig {
+    /// The leg IK's travel bound for a dancer on a requested path (`on_path`) or free
+    /// (metres; `f64::INFINITY`: none).
+    pub fn foot_ik_travel_bound(&self, on_path: bool) -> f64 {
+        let free = self.foot_ik_max_travel_m;
+        let bound = if on_path {
+            self.foot_ik_max_travel_on_path_m.or(free)
+        } else {
+            free
+        };
+        bound.unwrap_or(f64::INFINITY)
+    }
 }
 
 impl Default for SamplingConfig {
@@ -308,6 +326,7 @@ impl Default for SamplingConfig {
             foot_lock_rule: PlantedRule::Either,
             foot_ik: true,
             foot_ik_max_travel_m: None,
+            foot_ik_max_travel_on_path_m: None,
             foot_lock_leash_frames: None,
         }
     }
@@ -319,6 +338,10 @@ impl SamplingConfig {
     pub fn check(&self) -> Result<(), String> {
         for (name, v) in [
             ("foot_ik_max_travel_m", self.foot_ik_max_travel_m),
+            (
+                "foot_ik_max_travel_on_path_m",
+                self.foot_ik_max_travel_on_path_m,
+            ),
             ("foot_lock_leash_frames", self.foot_lock_leash_frames),
         ] {
             if let Some(v) = v
@@ -411,6 +434,24 @@ mod tests {
             };
             assert!(e.contains(name), "{e}");
         }
+        let on_path = SamplingConfig {
+            foot_ik_max_travel_on_path_m: Some(-1.0),
+            ..SamplingConfig::default()
+        };
+        let e = on_path.check().unwrap_err();
+        assert!(e.contains("foot_ik_max_travel_on_path_m"), "{e}");
+    }
+
+    #[test]
+    fn a_dancer_on_a_path_gets_its_own_travel_bound_or_the_free_one() {
+        let mut s = SamplingConfig::default();
+        assert_eq!(s.foot_ik_travel_bound(false), f64::INFINITY);
+        assert_eq!(s.foot_ik_travel_bound(true), f64::INFINITY);
+        s.foot_ik_max_travel_m = Some(0.1);
+        assert_eq!(s.foot_ik_travel_bound(true), 0.1);
+        s.foot_ik_max_travel_on_path_m = Some(0.2);
+        assert_eq!(s.foot_ik_travel_bound(false), 0.1);
+        assert_eq!(s.foot_ik_travel_bound(true), 0.2);
     }
 
     #[test]

@@ -162,7 +162,7 @@ impl DanceSystem for Group {
                     lock_planted_feet_leashed(&mut own, rule, sampling.foot_lock_leash_frames);
                 }
                 if sampling.foot_ik {
-                    let travel = sampling.foot_ik_max_travel_m.unwrap_or(f64::INFINITY);
+                    let travel = sampling.foot_ik_travel_bound(constrained);
                     pin_planted_feet_within(&mut own, rule, travel);
                 }
             }

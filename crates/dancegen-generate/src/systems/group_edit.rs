@@ -108,12 +108,7 @@ pub(super) fn edit(
             root: !placed,
             ik: model.config.model.sampling.foot_ik,
             rule: model.config.model.sampling.foot_lock_rule,
-            max_travel_m: model
-                .config
-                .model
-                .sampling
-                .foot_ik_max_travel_m
-                .unwrap_or(f64::INFINITY),
+            max_travel_m: model.config.model.sampling.foot_ik_travel_bound(placed),
         });
         let (joined, largest) = join_made_runs(&generated, known, lock);
         largest_join = largest_join.max(largest);
