@@ -313,6 +313,23 @@ mod tests {
         (skel, local, root)
     }
 
+    /// Contacts of the left leg only: `ankle` and `toe` per frame; the right leg free.
+    fn left_leg(ankle: Vec<bool>, toe: Vec<bool>) -> Vec<LegContacts> {
+        let t = ankle.len();
+        vec![
+            LegContacts { ankle, toe },
+            LegContacts {
+                ankle: vec![false; t],
+                toe: vec![false; t],
+            },
+        ]
+    }
+
+    /// Left leg planted (ankle and toe) on the frames `planted`.
+    fn left_planted(planted: Vec<bool>) -> Vec<LegContacts> {
+        left_leg(planted.clone(), planted)
+    }
+
     fn positions(skel: &Skeleton, local: &[Mat3], root: &[[f64; 3]]) -> Vec<Pose> {
         Pose::all(skel, local, root)
     }
@@ -322,16 +339,7 @@ mod tests {
         let t = 20;
         let (skel, mut local, root) = gliding(t);
         let before = positions(&skel, &local, &root);
-        let contacts = vec![
-            LegContacts {
-                ankle: vec![true; t],
-                toe: vec![true; t],
-            },
-            LegContacts {
-                ankle: vec![false; t],
-                toe: vec![false; t],
-            },
-        ];
+        let contacts = left_planted(vec![true; t]);
         let report = pin_planted_feet(
             &skel,
             &mut local,
@@ -368,16 +376,7 @@ mod tests {
         let (skel, mut local, root) = gliding(t);
         let before = positions(&skel, &local, &root);
         let planted: Vec<bool> = (0..t).map(|f| (10..20).contains(&f)).collect();
-        let contacts = vec![
-            LegContacts {
-                ankle: planted.clone(),
-                toe: planted,
-            },
-            LegContacts {
-                ankle: vec![false; t],
-                toe: vec![false; t],
-            },
-        ];
+        let contacts = left_planted(planted);
         pin_planted_feet(
             &skel,
             &mut local,
@@ -403,21 +402,6 @@ mod tests {
             // covers the gap to the pin (~4.5 cm at the run's start): 3 cm per frame at most.
             assert!(step < 0.03, "frame {f}: the ankle jumps {step} m");
         }
-    }
-
-    /// Left leg planted (ankle and toe) on the frames `planted` of a [`gliding`] clip.
-    fn left_planted(planted: Vec<bool>) -> Vec<LegContacts> {
-        let t = planted.len();
-        vec![
-            LegContacts {
-                ankle: planted.clone(),
-                toe: planted,
-            },
-            LegContacts {
-                ankle: vec![false; t],
-                toe: vec![false; t],
-            },
-        ]
     }
 
     #[test]
@@ -474,16 +458,7 @@ mod tests {
         let mut local = vec![Mat3::IDENTITY; t * 24];
         // The body flies up and away while the left foot claims contact.
         let root: Vec<[f64; 3]> = (0..t).map(|f| [0.05 * f as f64, 0.9, 0.0]).collect();
-        let contacts = vec![
-            LegContacts {
-                ankle: vec![true; t],
-                toe: vec![false; t],
-            },
-            LegContacts {
-                ankle: vec![false; t],
-                toe: vec![false; t],
-            },
-        ];
+        let contacts = left_leg(vec![true; t], vec![false; t]);
         let report = pin_planted_feet(
             &skel,
             &mut local,
