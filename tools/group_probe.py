@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Quick figures of group dances (`dancegen generate --system group -o X.npy`, (N, T, 24, 3)):
-per file, the root steps over 0.25 m in one frame and the largest, each dancer's pose spread and
-the closest pair of dancers; with two files (two seeds of one request), how much they differ.
+per file, the root steps over 0.25 m in one frame and the largest, each dancer's pose spread,
+its pose jumps (frames in which a joint moves more than 0.15 m relative to the pelvis: the leg
+IK's throws measured in docs/group-collapse.md §22; real salsa has 2-8 in 1,000 frames, mostly
+hands) and the closest pair of dancers; with two files (two seeds of one request), how much
+they differ.
 The measures are tools/group_eval.py's, so the figures match its report.
 
     python3 tools/group_probe.py seed0.npy [seed1.npy]
@@ -28,6 +31,19 @@ def root_steps(flat, n, t):
     return out
 
 
+POSE_JUMP_M = 0.15
+
+
+def pose_jumps(p, t):
+    """Frames of one dancer's joints `p` (flat, t × 24 × 3) in which some joint moves more than
+    POSE_JUMP_M relative to the pelvis since the frame before."""
+    def rel(f, j):
+        return [p[f * 72 + j * 3 + a] - p[f * 72 + a] for a in range(3)]
+    return sum(
+        any(math.dist(rel(f, j), rel(f - 1, j)) > POSE_JUMP_M for j in range(1, 24))
+        for f in range(1, t))
+
+
 def main(paths):
     if not 1 <= len(paths) <= 2:
         raise SystemExit(__doc__)
@@ -38,9 +54,11 @@ def main(paths):
         n, t = shape[0], shape[1]
         steps = root_steps(a, n, t)
         spread = [pose_spread_cm(a[k * t * 72:(k + 1) * t * 72], t) for k in range(n)]
+        jumps = [pose_jumps(a[k * t * 72:(k + 1) * t * 72], t) for k in range(n)]
         print(f"{path}: {n} dancers x {t} frames; root steps > {TELEPORT_M} m: "
               f"{sum(s > TELEPORT_M for s in steps)} of {len(steps)} (largest {max(steps):.3f} m); "
               f"pose spread cm {' '.join(f'{s:.1f}' for s in spread)}; "
+              f"pose jumps {' '.join(str(j) for j in jumps)}; "
               f"closest pair {closest_pair_cm(path):.1f} cm")
     if len(paths) == 2:
         print(f"seeds differ {seed_difference_cm(*paths):.2f} cm")
