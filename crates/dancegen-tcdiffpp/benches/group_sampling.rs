@@ -76,6 +76,7 @@ impl Bench {
             steps,
             eta: defaults.eta,
             spacing: defaults.spacing,
+            solver: defaults.solver,
             guidance,
             sampler,
             prefix: defaults.prefix,

@@ -6,7 +6,7 @@
 //! "Model size" (d = 128–192, 4 layers, 4 heads, N_max = 5 with masks, 150 frames, DDIM 20).
 //! Every ablation of the paper's Table 4 is a switch here.
 
-use dancegen_nn::diffusion::Spacing;
+use dancegen_nn::diffusion::{Solver, Spacing};
 use dancegen_refine::foot_lock::PlantedRule;
 use serde::{Deserialize, Serialize};
 
@@ -268,6 +268,8 @@ pub struct SamplingConfig {
     pub eta: f64,
     /// Which timesteps the DDIM steps visit (released: EDGE's linear spacing).
     pub spacing: Spacing,
+    /// The update at each step (released: DDIM). Absent in older bundles: DDIM.
+    pub solver: Solver,
     /// Guidance weight (EDGE / TCDiff++: 2).
     pub guidance: f64,
     pub sampler: LongSampler,
@@ -318,6 +320,7 @@ impl Default for SamplingConfig {
             steps: 6,
             eta: 1.0,
             spacing: Spacing::Linear,
+            solver: Solver::Ddim,
             guidance: 2.0,
             // docs/group-eval.md: on the held-out set LGDS's joins had a boundary jerk of 7.1
             // and root steps up to 0.7 m (free dances), the parallel sampler 1.2 and 0.17 m.
@@ -440,6 +443,22 @@ mod tests {
         };
         let e = on_path.check().unwrap_err();
         assert!(e.contains("foot_ik_max_travel_on_path_m"), "{e}");
+    }
+
+    #[test]
+    fn the_solver_is_read_by_name_and_defaults_to_ddim() {
+        let read = |t: &str| GroupModelConfig::from_toml(&format!("[sampling]\n{t}"));
+        assert_eq!(read("").unwrap().sampling.solver, Solver::Ddim);
+        for (name, solver) in [
+            ("ddim", Solver::Ddim),
+            ("dpmpp_2m", Solver::DpmPp2m),
+            ("dpmpp_2m_sde", Solver::DpmPp2mSde),
+        ] {
+            let c = read(&format!("solver = \"{name}\"")).unwrap();
+            assert_eq!(c.sampling.solver, solver);
+        }
+        let e = read("solver = \"euler\"").unwrap_err().to_string();
+        assert!(e.contains("euler") && e.contains("dpmpp_2m"), "{e}");
     }
 
     #[test]

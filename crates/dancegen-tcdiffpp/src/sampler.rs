@@ -28,7 +28,7 @@ use dancegen_nn::burn;
 use dancegen_nn::diffusion::longform::{ChannelLayout, stitch};
 use dancegen_nn::diffusion::noise::SeededNoise;
 use dancegen_nn::diffusion::{
-    Cue, CueActivity, Guidance, Method, SampleOptions, Schedule, Spacing, WeightSchedule,
+    Cue, CueActivity, Guidance, SampleOptions, Schedule, Solver, Spacing, WeightSchedule,
     sample_with,
 };
 use dancegen_nn::edge151::{DIMS, ROOT_HORIZONTAL, ROT6D_START};
@@ -64,6 +64,7 @@ pub struct GroupSampleOptions {
     pub steps: usize,
     pub eta: f64,
     pub spacing: Spacing,
+    pub solver: Solver,
     pub guidance: f64,
     pub sampler: LongSampler,
     pub prefix: PrefixMode,
@@ -172,11 +173,7 @@ fn sample_options(
     init: Option<Tensor<3>>,
 ) -> SampleOptions {
     SampleOptions {
-        method: Method::Ddim {
-            steps: opts.steps,
-            eta: opts.eta,
-            spacing: opts.spacing,
-        },
+        method: opts.solver.method(opts.steps, opts.eta, opts.spacing),
         // Mean/std-normalised data is not confined to [−1, 1] (EDGE's min-max range).
         clip_x0: None,
         guidance: if (opts.guidance - 1.0).abs() < 1e-9 {

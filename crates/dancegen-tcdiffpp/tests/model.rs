@@ -5,7 +5,7 @@
 use dancegen_nn::burn::optim::{AdamWConfig, GradientsParams};
 use dancegen_nn::burn::tensor::{Device, Distribution, Int, Tensor, TensorData};
 use dancegen_nn::device;
-use dancegen_nn::diffusion::{Conditioning, Denoiser, Schedule, Spacing};
+use dancegen_nn::diffusion::{Conditioning, Denoiser, Schedule, Solver, Spacing};
 use dancegen_nn::edge151::DIMS;
 use dancegen_nn::progress::NoHook;
 use dancegen_tcdiffpp::config::{DenoiserConfig, LongSampler, PrefixMode, SequenceMixer};
@@ -446,6 +446,7 @@ fn short_sampling(sampler: LongSampler, prefix: PrefixMode, seed: u64) -> GroupS
         steps: 4,
         eta: 1.0,
         spacing: Spacing::Linear,
+        solver: Solver::Ddim,
         guidance: 2.0,
         sampler,
         prefix,
@@ -580,6 +581,7 @@ fn the_mamba_decoder_samples_long_dances() {
         steps: 3,
         eta: 1.0,
         spacing: Spacing::Linear,
+        solver: Solver::Ddim,
         guidance: 1.0,
         sampler: LongSampler::Lgds,
         prefix: PrefixMode::Clean,

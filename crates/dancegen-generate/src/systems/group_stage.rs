@@ -54,6 +54,7 @@ pub(super) fn sample_options(
         steps: common.steps.unwrap_or(sampling.steps),
         eta: sampling.eta,
         spacing: sampling.spacing,
+        solver: sampling.solver,
         guidance: common.guidance.unwrap_or(sampling.guidance),
         sampler: opts.sampler.unwrap_or(if partial {
             // The parallel sampler drops control in windows whose first frame does not give

@@ -25,9 +25,9 @@ use burn::tensor::{Int, Tensor};
 
 pub use noise::SeededNoise;
 pub use sampler::{
-    ChannelScale, Cue, CueActivity, Guidance, Method, SampleOptions, Spacing, WeightSchedule,
-    ddim_step, ddim_timesteps, ddim_timesteps_spaced, ddpm_step, overwrite_first_halves, sample,
-    sample_hooked, sample_with,
+    ChannelScale, Cue, CueActivity, DpmPrevious, Guidance, Method, SampleOptions, Solver, Spacing,
+    WeightSchedule, ddim_step, ddim_timesteps, ddim_timesteps_spaced, ddpm_step, dpmpp_2m_step,
+    overwrite_first_halves, sample, sample_hooked, sample_with,
 };
 pub use schedule::{BetaSchedule, Schedule, x0_loss};
 

@@ -6,6 +6,8 @@
 //!   `int(linspace(−1, T − 1, steps + 1))` reversed (999, 979, …, 19, −1 for 50 steps on
 //!   T = 1000); the step into −1 outputs x̂0. `eta = 1` in EDGE.
 //! - DDPM ancestral sampling over all T steps with the posterior q(x_{t−1} | x_t, x̂0).
+//! - DPM-Solver++(2M) (Lu et al. 2022, arXiv:2211.01095), deterministic or its SDE variant:
+//!   a second-order multistep solver on the same x̂0, for few steps.
 //! - x̂0 is clamped to [−1, 1] (EDGE `clip_denoised`) before the noise is re-derived from it.
 //! - Guidance `unc + w · (cond − unc)` (EDGE, w = 2); ReactDance's layer-decoupled CFG writes
 //!   `(1 + s_r) · cond − s_r · unc` per quantisation layer r, i.e. `w_r = 1 + s_r`.
@@ -29,7 +31,7 @@ pub const EDGE_CLIP: (f64, f64) = (-1.0, 1.0);
 /// EDGE's DDPM path caps w at 1 below this fraction of T (`p_mean_variance`).
 pub const EDGE_DDPM_LOW_T_FRACTION: f64 = 0.1;
 
-/// Ancestral DDPM or strided DDIM.
+/// Ancestral DDPM, strided DDIM or DPM-Solver++(2M).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Method {
     /// All T steps, posterior mean + `exp(½ log σ²_t) · z` (no noise into t = −1).
@@ -41,6 +43,50 @@ pub enum Method {
         eta: f64,
         spacing: Spacing,
     },
+    /// DPM-Solver++(2M) on the timesteps `spacing` picks ([`dpmpp_2m_step`]). Why: with few
+    /// steps the first-order DDIM lands far from what the same network gives with many (a
+    /// group network's pose spread 5.5 cm at 6 steps, 8.9 at 50); the second-order update
+    /// uses the previous step's x̂0 to follow x̂0's change over the step. `stochastic` is the
+    /// SDE variant, whose first-order step is DDIM with eta = 1; otherwise the ODE variant,
+    /// whose first-order step is DDIM with eta = 0.
+    DpmSolverPp2m {
+        steps: usize,
+        spacing: Spacing,
+        stochastic: bool,
+    },
+}
+
+/// Which update a strided sampler makes at each step: a model config's `solver` key.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Solver {
+    /// DDIM with stochasticity `eta`: EDGE's and the papers' sampler.
+    #[default]
+    #[serde(rename = "ddim")]
+    Ddim,
+    /// DPM-Solver++(2M), deterministic ([`Method::DpmSolverPp2m`]); `eta` is not read.
+    #[serde(rename = "dpmpp_2m")]
+    DpmPp2m,
+    /// SDE-DPM-Solver++(2M) ([`Method::DpmSolverPp2m`]); `eta` is not read.
+    #[serde(rename = "dpmpp_2m_sde")]
+    DpmPp2mSde,
+}
+
+impl Solver {
+    /// The [`Method`] of `steps` steps at the timesteps `spacing` picks.
+    pub fn method(self, steps: usize, eta: f64, spacing: Spacing) -> Method {
+        match self {
+            Solver::Ddim => Method::Ddim {
+                steps,
+                eta,
+                spacing,
+            },
+            Solver::DpmPp2m | Solver::DpmPp2mSde => Method::DpmSolverPp2m {
+                steps,
+                spacing,
+                stochastic: self == Solver::DpmPp2mSde,
+            },
+        }
+    }
 }
 
 /// Which timesteps a strided DDIM visits.
@@ -123,6 +169,64 @@ pub fn ddim_step(
     let sigma = eta * ((1.0 - a / an) * (1.0 - an) / (1.0 - a)).sqrt();
     let c = (1.0 - an - sigma * sigma).max(0.0).sqrt();
     x0 * an.sqrt() + eps * c + noise * sigma
+}
+
+/// `λ_t = log(α_t / σ_t)` of DPM-Solver, `α_t = √ᾱ_t`, `σ_t = √(1 − ᾱ_t)`: half the log-SNR.
+fn half_log_snr(schedule: &Schedule, t: usize) -> f64 {
+    let a = schedule.alphas_cumprod[t];
+    0.5 * (a / (1.0 - a)).ln()
+}
+
+/// The previous step of a DPM-Solver++(2M) run: its x̂0 and its `h = λ_next − λ_t`.
+#[derive(Clone, Debug)]
+pub struct DpmPrevious {
+    pub x0: Tensor<3>,
+    pub h: f64,
+}
+
+/// One DPM-Solver++(2M) step from `x_t` to `t_next` (Lu et al. 2022, arXiv:2211.01095,
+/// Alg. 2 and the SDE-DPM-Solver++(2M) of its §5), with `h = λ_next − λ_t` and, when a
+/// previous step is given, `D = x̂0 + (x̂0 − x̂0_prev) / (2r)`, `r = h_prev / h` (else
+/// `D = x̂0`):
+/// - ODE: `x_n = (σ_n/σ_t) x_t + α_n (1 − e^{−h}) D`;
+/// - SDE: `x_n = (σ_n/σ_t) e^{−h} x_t + α_n (1 − e^{−2h}) D + σ_n √(1 − e^{−2h}) z`.
+///
+/// Without a previous step the ODE step is DDIM's with eta = 0 and the SDE step DDIM's with
+/// eta = 1. `t_next < 0` returns x̂0, as DDIM does. Returns `x_n` and this step's `h`.
+#[allow(clippy::too_many_arguments)]
+pub fn dpmpp_2m_step(
+    schedule: &Schedule,
+    x_t: Tensor<3>,
+    x0: Tensor<3>,
+    previous: Option<&DpmPrevious>,
+    t: usize,
+    t_next: i64,
+    stochastic: bool,
+    noise: Tensor<3>,
+) -> (Tensor<3>, f64) {
+    if t_next < 0 {
+        return (x0, f64::INFINITY);
+    }
+    let tn = t_next as usize;
+    let sigma = |t: usize| (1.0 - schedule.alphas_cumprod[t]).sqrt();
+    let (sigma_t, sigma_n) = (sigma(t), sigma(tn));
+    let alpha_n = schedule.alphas_cumprod[tn].sqrt();
+    let h = half_log_snr(schedule, tn) - half_log_snr(schedule, t);
+    let d = match previous {
+        Some(p) if p.h.is_finite() && p.h > 0.0 => {
+            let k = 0.5 * h / p.h;
+            x0.clone() * (1.0 + k) - p.x0.clone() * k
+        }
+        _ => x0,
+    };
+    let x_n = if stochastic {
+        let e = (-h).exp();
+        let keep = 1.0 - (-2.0 * h).exp();
+        x_t * (sigma_n / sigma_t * e) + d * (alpha_n * keep) + noise * (sigma_n * keep.sqrt())
+    } else {
+        x_t * (sigma_n / sigma_t) + d * (alpha_n * (1.0 - (-h).exp()))
+    };
+    (x_n, h)
 }
 
 /// One DDPM ancestral step from `t` to `t − 1` (EDGE `p_sample`): the posterior mean
@@ -451,7 +555,9 @@ pub fn sample_with<M: Denoiser>(
     let big_t = schedule.timesteps();
     let pairs: Vec<(usize, i64)> = match opts.method {
         Method::Ddpm => (0..big_t).rev().map(|t| (t, t as i64 - 1)).collect(),
-        Method::Ddim { steps, spacing, .. } => ddim_timesteps_spaced(big_t, steps, spacing),
+        Method::Ddim { steps, spacing, .. } | Method::DpmSolverPp2m { steps, spacing, .. } => {
+            ddim_timesteps_spaced(big_t, steps, spacing)
+        }
     };
     let n = pairs.len();
     let mut rng = SeededNoise::new(opts.seed);
@@ -460,6 +566,7 @@ pub fn sample_with<M: Denoiser>(
         None => rng.tensor(shape, device),
     };
     let base_w = opts.guidance.weights(shape[2]);
+    let mut previous: Option<DpmPrevious> = None;
     for (i, &(t, t_next)) in pairs.iter().enumerate() {
         let w = base_w.as_ref().map(|w| {
             w.iter()
@@ -483,6 +590,26 @@ pub fn sample_with<M: Denoiser>(
                 Method::Ddpm => ddpm_step(schedule, x, x0, t, rng.tensor(shape, device)),
                 Method::Ddim { eta, .. } => {
                     ddim_step(schedule, x, x0, t, t_next, eta, rng.tensor(shape, device))
+                }
+                Method::DpmSolverPp2m { stochastic, .. } => {
+                    // The ODE variant draws no noise.
+                    let noise = if stochastic {
+                        rng.tensor(shape, device)
+                    } else {
+                        Tensor::zeros(shape, device)
+                    };
+                    let (next, h) = dpmpp_2m_step(
+                        schedule,
+                        x,
+                        x0.clone(),
+                        previous.as_ref(),
+                        t,
+                        t_next,
+                        stochastic,
+                        noise,
+                    );
+                    previous = Some(DpmPrevious { x0, h });
+                    next
                 }
             }
         };
