@@ -294,6 +294,7 @@ fn group_options(args: &GenerateArgs, given: Option<usize>) -> Result<GroupOptio
         unison: args.unison,
         separation: !args.no_separation,
         foot_lock: !args.no_foot_lock,
+        beat_align: !args.no_beat_align,
         ..GroupOptions::new(n)
     };
     if let Some(f) = &args.formation {

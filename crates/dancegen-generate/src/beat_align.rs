@@ -204,13 +204,13 @@ fn align_with(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use dancegen_metrics::bas::{beat_align_score, clip_music_beats};
 
     /// 300 frames at 30 fps of a dancer bobbing (root height and both shoulders) every 15 frames
     /// (a 120 bpm beat), `lag` frames late.
-    fn bob(lag: f64) -> SmplMotion {
+    pub(crate) fn bob(lag: f64) -> SmplMotion {
         let frames = 300;
         let mut m = SmplMotion {
             fps: 30.0,

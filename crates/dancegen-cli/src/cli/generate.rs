@@ -206,8 +206,8 @@ pub struct GenerateArgs {
     #[arg(long)]
     pub no_foot_lock: bool,
     /// Leave the timing as generated: no time warp moving the dance's beats onto the song's
-    /// (solo) or the follower's onto the leader's (duet); post-processing, not part of Lodge++
-    /// or ReactDance; the playback speed stays within ±15 %.
+    /// (solo, each group dancer) or the follower's onto the leader's (duet); post-processing,
+    /// not part of Lodge++, ReactDance or TCDiff++; the playback speed stays within ±15 %.
     #[arg(long)]
     pub no_beat_align: bool,
 }

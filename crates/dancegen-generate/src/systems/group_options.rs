@@ -29,6 +29,9 @@ pub struct GroupOptions {
     pub separation: bool,
     /// Planted-feet pass (leg IK, and the root lock for free dancers).
     pub foot_lock: bool,
+    /// Time-warp each dancer so that its kinematic beats land on the song's
+    /// ([`crate::beat_align`], as the solo's; post-processing, not part of TCDiff++).
+    pub beat_align: bool,
 }
 
 impl GroupOptions {
@@ -40,6 +43,7 @@ impl GroupOptions {
             sampler: None,
             separation: true,
             foot_lock: true,
+            beat_align: true,
         }
     }
 
