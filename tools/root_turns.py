@@ -10,7 +10,12 @@ unwrapped; the tilt is the angle between the pelvis -> spine1 segment and the ve
 - heading d2, tilt d2 (deg): RMS of the second frame difference of each, the frame-to-frame
   jitter of the body's orientation;
 - min up: the smallest vertical component of the unit pelvis -> spine1 segment (1 upright,
-  0 lying, < 0 upside down).
+  0 lying, < 0 upside down);
+- spread cm: the pose spread of docs/group-eval.md (mean distance of the pelvis-relative joints
+  from their own mean, in world axes, so turning counts); facing cm: the same with every frame
+  turned about the vertical to face one way (by the hip axis), the body's own motion.
+
+The last line averages every dancer of every file: spread, facing, and the median range.
 
 Written for issue 43 (docs/group-collapse.md §21), to tell a jitter of the heading from one of
 the tilt, which the physical figures (`dancegen eval --metrics physical`) do not separate.
@@ -46,7 +51,8 @@ def rms_second_difference(v):
 
 
 def dancer_figures(flat, t, fps):
-    """(turn deg/s, range deg, heading d2 deg, tilt d2 deg, min up) of one dancer."""
+    """(turn deg/s, range deg, heading d2 deg, tilt d2 deg, min up, spread cm, facing cm) of
+    one dancer."""
     def joint(f, j):
         i = f * 72 + 3 * j
         return flat[i], flat[i + 1], flat[i + 2]
@@ -62,9 +68,25 @@ def dancer_figures(flat, t, fps):
         tilt.append(math.acos(max(-1.0, min(1.0, u))))
     h = unwrap(heading)
     turning = sum(abs(b - a) for a, b in zip(h, h[1:])) / (t / fps)
+    world, facing = [], []
+    for f in range(t):
+        p = joint(f, PELVIS)
+        c, s = math.cos(-heading[f]), math.sin(-heading[f])
+        rel = [tuple(v - o for v, o in zip(joint(f, j), p)) for j in range(24)]
+        world.append(rel)
+        facing.append([(x * c - z * s, y, x * s + z * c) for x, y, z in rel])
     return (math.degrees(turning), math.degrees(max(h) - min(h)),
             math.degrees(rms_second_difference(h)), math.degrees(rms_second_difference(tilt)),
-            min(up))
+            min(up), spread_cm(world), spread_cm(facing))
+
+
+def spread_cm(frames):
+    """Mean distance (cm) of each joint from its own mean over the frames."""
+    t = len(frames)
+    means = [tuple(statistics.fmean(fr[j][c] for fr in frames) for c in range(3))
+             for j in range(24)]
+    return 100.0 * statistics.fmean(math.dist(fr[j], means[j]) for fr in frames
+                                    for j in range(24)) if t else 0.0
 
 
 def main(args):
@@ -75,6 +97,7 @@ def main(args):
         fps, args = float(args[1]), args[2:]
     if not args:
         raise SystemExit(__doc__)
+    every = []
     for path in args:
         shape, a = read_npy(path)
         if len(shape) == 3:
@@ -84,11 +107,15 @@ def main(args):
                              f"got {shape}")
         n, t = shape[0], shape[1]
         rows = [dancer_figures(a[k * t * 72:(k + 1) * t * 72], t, fps) for k in range(n)]
+        every += rows
         cols = list(zip(*rows))
         fmt = lambda vals, p: " ".join(f"{v:.{p}f}" for v in vals)  # noqa: E731
         print(f"{path}: turn deg/s {fmt(cols[0], 0)} | range deg {fmt(cols[1], 0)} | "
               f"heading d2 deg {fmt(cols[2], 2)} | tilt d2 deg {fmt(cols[3], 2)} | "
-              f"min up {fmt(cols[4], 2)}")
+              f"min up {fmt(cols[4], 2)} | spread cm {fmt(cols[5], 1)} | facing cm {fmt(cols[6], 1)}")
+    cols = list(zip(*every))
+    print(f"{len(every)} dancers: spread cm {statistics.fmean(cols[5]):.2f}, facing one way "
+          f"{statistics.fmean(cols[6]):.2f}, range deg median {statistics.median(cols[1]):.0f}")
 
 
 if __name__ == "__main__":
