@@ -14,7 +14,7 @@
 use dancegen_motion::repr::motion::{GroundMode, SmplMotion};
 use dancegen_motion::rotation::Mat3;
 use dancegen_nn::loss::FkSkeleton;
-use dancegen_refine::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS};
+use dancegen_refine::foot_ik::{self, FootIkReport, LegContacts, SMPL_LEGS, Stepping};
 use dancegen_refine::foot_lock::{Axes, PLANTED, height_contacts, leashed, planted_feet_offsets};
 
 use crate::foot_refine::CONTACT_HEIGHT;
@@ -99,6 +99,35 @@ pub fn pin_planted_feet_within(
     rule: PlantedRule,
     max_travel_m: f64,
 ) -> FootIkReport {
+    pin(frames, rule, max_travel_m, None)
+}
+
+/// [`pin_planted_feet_within`] that cuts a run whose foot strays more than `max_travel_m`
+/// into plants within that bound joined by swings of `swing_frames` frames lifted `lift_m` at
+/// their middle (`dancegen_refine::foot_ik::Stepping`): for a body dragged along a path whose
+/// legs do not walk it, which would otherwise slide.
+pub fn pin_planted_feet_stepping(
+    frames: &mut [f32],
+    rule: PlantedRule,
+    max_travel_m: f64,
+    swing_frames: usize,
+    lift_m: f64,
+) -> FootIkReport {
+    let stepping = Stepping {
+        swing_frames,
+        lift: lift_m,
+        // EDGE-151 worlds are Z-up (see `feet_and_contacts`).
+        up: [0.0, 0.0, 1.0],
+    };
+    pin(frames, rule, max_travel_m, Some(stepping))
+}
+
+fn pin(
+    frames: &mut [f32],
+    rule: PlantedRule,
+    max_travel_m: f64,
+    stepping: Option<Stepping>,
+) -> FootIkReport {
     let Some((_, contact)) = feet_and_contacts(frames, rule) else {
         return FootIkReport::default();
     };
@@ -136,7 +165,7 @@ pub fn pin_planted_feet_within(
     ];
     debug_assert_eq!([SMPL_LEGS[0].ankle, SMPL_LEGS[1].ankle], [FEET[0], FEET[1]]);
     debug_assert_eq!([SMPL_LEGS[0].toe, SMPL_LEGS[1].toe], [FEET[2], FEET[3]]);
-    let report = foot_ik::pin_planted_feet(
+    let report = foot_ik::pin_planted_feet_stepping(
         &skeleton,
         &mut local,
         &root,
@@ -144,6 +173,7 @@ pub fn pin_planted_feet_within(
         &contacts,
         IK_BLEND_FRAMES,
         max_travel_m,
+        stepping,
     );
     let changed: Vec<usize> = SMPL_LEGS
         .iter()

@@ -289,6 +289,13 @@ pub struct SamplingConfig {
     /// formation): its root is dragged along the path while its legs do not walk it, so its
     /// planted feet travel further. Absent: the same bound as a free dancer's.
     pub foot_ik_max_travel_on_path_m: Option<f64>,
+    /// For a dancer on a requested path: a contact run whose foot strays more than the travel
+    /// bound is cut into plants joined by swings of this many frames
+    /// (`dancegen_lodgepp::planted_feet::pin_planted_feet_stepping`), so its feet step along
+    /// the path instead of sliding. Absent: such runs are left to slide.
+    pub foot_ik_swing_frames_on_path: Option<usize>,
+    /// Height (metres) of those swings' arc at its middle. Absent: 0.06 m.
+    pub foot_ik_swing_lift_m: Option<f64>,
     /// Time constant (frames) of a leash on the root lock: a removed glide is given back over
     /// about this long, so a dancer keeps the place the network gives it in the group
     /// (`dancegen_lodgepp::planted_feet::lock_planted_feet_leashed`). Absent: no leash.
@@ -316,7 +323,9 @@ impl Default for SamplingConfig {
             // models/tcdiffpp-small/MODEL_CARD.md "Steps"): 6 steps matched 20 on every
             // metric of docs/group-eval.md (collisions 0.32 % vs 0.73 %, FID_k 761 vs 766,
             // boundary jerk 1.00 vs 1.15) at 3.3 times fewer denoiser calls, which the 5 × 60 s
-            // target of issue #17 needs on 2 cores.
+            // target of issue #17 needs on 2 cores. That network ignored its input; one that
+            // reads it dances more with more steps (docs/group-collapse.md §23), and the
+            // shipped bundle sets its own count.
             steps: 6,
             eta: 1.0,
             spacing: Spacing::Linear,
@@ -331,6 +340,8 @@ impl Default for SamplingConfig {
             foot_ik_max_travel_m: None,
             foot_ik_max_travel_on_path_m: None,
             foot_lock_leash_frames: None,
+            foot_ik_swing_frames_on_path: None,
+            foot_ik_swing_lift_m: None,
         }
     }
 }
@@ -346,6 +357,7 @@ impl SamplingConfig {
                 self.foot_ik_max_travel_on_path_m,
             ),
             ("foot_lock_leash_frames", self.foot_lock_leash_frames),
+            ("foot_ik_swing_lift_m", self.foot_ik_swing_lift_m),
         ] {
             if let Some(v) = v
                 && !(v.is_finite() && v > 0.0)
@@ -353,9 +365,28 @@ impl SamplingConfig {
                 return Err(format!("{name} {v}: must be a positive number"));
             }
         }
+        if self.foot_ik_swing_frames_on_path == Some(0) {
+            return Err("foot_ik_swing_frames_on_path 0: a swing needs at least one frame".into());
+        }
         Ok(())
     }
+
+    /// The swing of a dancer on a requested path's steps, `(frames, lift metres)`; `None`:
+    /// its travelling contact runs are left alone.
+    pub fn swing_on_path(&self) -> Option<(usize, f64)> {
+        self.foot_ik_swing_frames_on_path.map(|frames| {
+            (
+                frames,
+                self.foot_ik_swing_lift_m.unwrap_or(DEFAULT_SWING_LIFT_M),
+            )
+        })
+    }
 }
+
+/// A swing's lift when the bundle names none: a foot lifted 6 cm at the middle of its swing
+/// (ankle about 13 cm above the floor) is off the floor by the 8 cm ankle and 5 cm toe contact
+/// heights of `dancegen_metrics::physical`, as a stepping foot is.
+pub const DEFAULT_SWING_LIFT_M: f64 = 0.06;
 
 /// `[model]`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -443,6 +474,27 @@ mod tests {
         };
         let e = on_path.check().unwrap_err();
         assert!(e.contains("foot_ik_max_travel_on_path_m"), "{e}");
+        let swing = SamplingConfig {
+            foot_ik_swing_frames_on_path: Some(0),
+            ..SamplingConfig::default()
+        };
+        assert!(
+            swing
+                .check()
+                .unwrap_err()
+                .contains("foot_ik_swing_frames_on_path")
+        );
+        let lift = SamplingConfig {
+            foot_ik_swing_lift_m: Some(-0.1),
+            ..SamplingConfig::default()
+        };
+        assert!(lift.check().unwrap_err().contains("foot_ik_swing_lift_m"));
+        assert_eq!(SamplingConfig::default().swing_on_path(), None);
+        let eight = SamplingConfig {
+            foot_ik_swing_frames_on_path: Some(8),
+            ..SamplingConfig::default()
+        };
+        assert_eq!(eight.swing_on_path(), Some((8, DEFAULT_SWING_LIFT_M)));
     }
 
     #[test]

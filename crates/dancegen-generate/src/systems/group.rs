@@ -13,7 +13,9 @@
 
 use std::path::Path;
 
-use dancegen_lodgepp::planted_feet::{lock_planted_feet_leashed, pin_planted_feet_within};
+use dancegen_lodgepp::planted_feet::{
+    lock_planted_feet_leashed, pin_planted_feet_stepping, pin_planted_feet_within,
+};
 use dancegen_motion::repr::motion::POSE_DIMS;
 use dancegen_motion::repr::{Edge151, SmplMotion};
 use dancegen_nn::burn::tensor::Device;
@@ -166,7 +168,14 @@ impl DanceSystem for Group {
                 }
                 if sampling.foot_ik {
                     let travel = sampling.foot_ik_travel_bound(constrained);
-                    pin_planted_feet_within(&mut own, rule, travel);
+                    match sampling.swing_on_path().filter(|_| constrained) {
+                        Some((swing, lift)) => {
+                            pin_planted_feet_stepping(&mut own, rule, travel, swing, lift);
+                        }
+                        None => {
+                            pin_planted_feet_within(&mut own, rule, travel);
+                        }
+                    }
                 }
             }
             dancers
