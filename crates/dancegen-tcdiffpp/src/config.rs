@@ -365,8 +365,19 @@ impl SamplingConfig {
                 return Err(format!("{name} {v}: must be a positive number"));
             }
         }
-        if self.foot_ik_swing_frames_on_path == Some(0) {
-            return Err("foot_ik_swing_frames_on_path 0: a swing needs at least one frame".into());
+        if let Some(n) = self.foot_ik_swing_frames_on_path
+            && !(1..=MAX_SWING_FRAMES).contains(&n)
+        {
+            return Err(format!(
+                "foot_ik_swing_frames_on_path {n}: must be 1 to {MAX_SWING_FRAMES} frames"
+            ));
+        }
+        if let Some(lift) = self.foot_ik_swing_lift_m
+            && lift > MAX_SWING_LIFT_M
+        {
+            return Err(format!(
+                "foot_ik_swing_lift_m {lift}: at most {MAX_SWING_LIFT_M} m"
+            ));
         }
         Ok(())
     }
@@ -382,6 +393,14 @@ impl SamplingConfig {
         })
     }
 }
+
+/// The longest swing a bundle may ask for: 2 s at 30 fps, longer than any step (real salsa
+/// steps at 1.9 per second); it also keeps the plant arithmetic far from overflow.
+pub const MAX_SWING_FRAMES: usize = 60;
+
+/// The highest swing a bundle may ask for: 0.5 m, a knee-high step; a larger lift sends the
+/// IK target out of the leg's reach.
+pub const MAX_SWING_LIFT_M: f64 = 0.5;
 
 /// A swing's lift when the bundle names none: a foot lifted 6 cm at the middle of its swing
 /// (ankle about 13 cm above the floor) is off the floor by the 8 cm ankle and 5 cm toe contact
@@ -474,21 +493,28 @@ mod tests {
         };
         let e = on_path.check().unwrap_err();
         assert!(e.contains("foot_ik_max_travel_on_path_m"), "{e}");
-        let swing = SamplingConfig {
-            foot_ik_swing_frames_on_path: Some(0),
+        for frames in [0, MAX_SWING_FRAMES + 1, usize::MAX] {
+            let swing = SamplingConfig {
+                foot_ik_swing_frames_on_path: Some(frames),
+                ..SamplingConfig::default()
+            };
+            let e = swing.check().unwrap_err();
+            assert!(e.contains("foot_ik_swing_frames_on_path"), "{frames}: {e}");
+        }
+        for bad in [-0.1, f64::NAN, 0.51, 1e30] {
+            let lift = SamplingConfig {
+                foot_ik_swing_lift_m: Some(bad),
+                ..SamplingConfig::default()
+            };
+            let e = lift.check().unwrap_err();
+            assert!(e.contains("foot_ik_swing_lift_m"), "{bad}: {e}");
+        }
+        let ok = SamplingConfig {
+            foot_ik_swing_frames_on_path: Some(MAX_SWING_FRAMES),
+            foot_ik_swing_lift_m: Some(MAX_SWING_LIFT_M),
             ..SamplingConfig::default()
         };
-        assert!(
-            swing
-                .check()
-                .unwrap_err()
-                .contains("foot_ik_swing_frames_on_path")
-        );
-        let lift = SamplingConfig {
-            foot_ik_swing_lift_m: Some(-0.1),
-            ..SamplingConfig::default()
-        };
-        assert!(lift.check().unwrap_err().contains("foot_ik_swing_lift_m"));
+        assert!(ok.check().is_ok());
         assert_eq!(SamplingConfig::default().swing_on_path(), None);
         let eight = SamplingConfig {
             foot_ik_swing_frames_on_path: Some(8),
