@@ -122,12 +122,17 @@ pub fn pin_planted_feet_stepping(
             "one contact per frame"
         );
         let world = Pose::all(skeleton, local, root);
-        let ankle_pins = Pins::new(&c.ankle, blend_frames, max_travel_m, stepping, |f| {
-            world[f].pos[leg.ankle]
-        });
-        let toe_pins = Pins::new(&c.toe, blend_frames, max_travel_m, stepping, |f| {
-            world[f].pos[leg.toe]
-        });
+        let ankle_at = |f: usize| world[f].pos[leg.ankle];
+        let toe_at = |f: usize| world[f].pos[leg.toe];
+        let (ankle_runs, toe_runs) = match stepping {
+            None => (
+                joint_runs(&c.ankle, max_travel_m, ankle_at),
+                joint_runs(&c.toe, max_travel_m, toe_at),
+            ),
+            Some(step) => foot_runs(c, max_travel_m, step, ankle_at, toe_at),
+        };
+        let ankle_pins = Pins::new(ankle_runs, t, blend_frames);
+        let toe_pins = Pins::new(toe_runs, t, blend_frames);
         let toe_offset = skeleton.offsets()[leg.toe];
         for (f, pose) in world.iter().enumerate() {
             let (wa, pa) = ankle_pins.at(f);
@@ -186,6 +191,88 @@ impl Pose {
     }
 }
 
+/// A contact run's pins: its first frame and the joint's target on each of its frames.
+type Run = (usize, Vec<[f64; 3]>);
+
+/// The runs of planted frames, each as `[start, end)`.
+fn planted_runs(planted: &[bool]) -> Vec<(usize, usize)> {
+    let mut runs = Vec::new();
+    let mut f = 0;
+    while f < planted.len() {
+        if !planted[f] {
+            f += 1;
+            continue;
+        }
+        let start = f;
+        while f < planted.len() && planted[f] {
+            f += 1;
+        }
+        runs.push((start, f));
+    }
+    runs
+}
+
+/// One joint's runs, each pinned to the joint's mean place in it; a run in which the joint
+/// strays more than `max_travel` from that place makes a step or a slide, not a plant, and is
+/// left alone.
+fn joint_runs(planted: &[bool], max_travel: f64, pos: impl Fn(usize) -> [f64; 3]) -> Vec<Run> {
+    planted_runs(planted)
+        .into_iter()
+        .filter_map(|(start, end)| {
+            let (mean, travel) = place(start, end, &pos);
+            (travel <= max_travel).then(|| (start, vec![mean; end - start]))
+        })
+        .collect()
+}
+
+/// The ankle's and the toe's runs of one leg with stepping. The foot is in contact while
+/// either joint is planted; a contact in which either joint's run strays beyond `max_travel`
+/// is stepped as one rigid foot ([`foot_steps`]): both joints planted and swung on the same
+/// frames. Stepped apart, the heel's and the toe's plants were cut at different frames, and
+/// the foot, turned to point from the ankle's target to the toe's, spun by up to 114 degrees
+/// in a frame. Other contacts keep [`joint_runs`]' pins.
+fn foot_runs(
+    contacts: &LegContacts,
+    max_travel: f64,
+    step: Stepping,
+    ankle: impl Fn(usize) -> [f64; 3],
+    toe: impl Fn(usize) -> [f64; 3],
+) -> (Vec<Run>, Vec<Run>) {
+    let contact: Vec<bool> = contacts
+        .ankle
+        .iter()
+        .zip(&contacts.toe)
+        .map(|(&a, &t)| a || t)
+        .collect();
+    let (mut ankle_runs, mut toe_runs) = (Vec::new(), Vec::new());
+    for (start, end) in planted_runs(&contact) {
+        let own = |planted: &[bool], pos: &dyn Fn(usize) -> [f64; 3]| {
+            planted_runs(&planted[start..end])
+                .into_iter()
+                .map(|(a, b)| (start + a, start + b, place(start + a, start + b, &pos)))
+                .collect::<Vec<_>>()
+        };
+        let ankle_own = own(&contacts.ankle, &ankle);
+        let toe_own = own(&contacts.toe, &toe);
+        let travels = ankle_own
+            .iter()
+            .chain(&toe_own)
+            .any(|(_, _, (_, travel))| *travel > max_travel);
+        if !travels {
+            let pinned = |runs: Vec<(usize, usize, ([f64; 3], f64))>| {
+                runs.into_iter()
+                    .map(|(a, b, (mean, _))| (a, vec![mean; b - a]))
+            };
+            ankle_runs.extend(pinned(ankle_own));
+            toe_runs.extend(pinned(toe_own));
+        } else if let Some((a, t)) = foot_steps(start, end, max_travel, step, &ankle, &toe) {
+            ankle_runs.push((start, a));
+            toe_runs.push((start, t));
+        }
+    }
+    (ankle_runs, toe_runs)
+}
+
 /// Per-frame pin weight and position of one joint from its contact runs.
 struct Pins {
     weight: Vec<f64>,
@@ -193,45 +280,11 @@ struct Pins {
 }
 
 impl Pins {
-    /// A run of planted frames `[start, end)` is pinned to the joint's mean place in it,
-    /// unless the joint strays more than `max_travel` from that place: then, with `stepping`,
-    /// it is cut into plants that each stay within `max_travel`, the target swinging from one
-    /// plant's place to the next over the frames between them; without, it is left alone.
-    /// Around each run the weight ramps over `blend` frames; where two runs' ramps meet, the
-    /// target moves from the one run's place to the other's across the frames between them
-    /// (taking the nearer run's place jumped the foot from one to the other in a single frame).
-    fn new(
-        planted: &[bool],
-        blend: usize,
-        max_travel: f64,
-        stepping: Option<Stepping>,
-        pos: impl Fn(usize) -> [f64; 3],
-    ) -> Pins {
-        let t = planted.len();
-        // Each run: its first frame and its target on each of its frames.
-        let mut runs: Vec<(usize, Vec<[f64; 3]>)> = Vec::new();
-        let mut f = 0;
-        while f < t {
-            if !planted[f] {
-                f += 1;
-                continue;
-            }
-            let start = f;
-            while f < t && planted[f] {
-                f += 1;
-            }
-            let end = f;
-            let (mean, travel) = place(start, end, &pos);
-            if travel <= max_travel {
-                runs.push((start, vec![mean; end - start]));
-            } else if let Some(step) = stepping {
-                // A joint that goes somewhere in the run makes a step or a slide, not a plant:
-                // with stepping, a chain of plants and swings.
-                if let Some(targets) = steps(start, end, max_travel, step, &pos) {
-                    runs.push((start, targets));
-                }
-            }
-        }
+    /// Each run (sorted, not overlapping) pins the joint to its targets. Around each run the
+    /// weight ramps over `blend` frames; where two runs' ramps meet, the target moves from the
+    /// one run's place to the other's across the frames between them (taking the nearer run's
+    /// place jumped the foot from one to the other in a single frame).
+    fn new(runs: Vec<Run>, t: usize, blend: usize) -> Pins {
         // Raised cosine: 1 in the run, falling to 0 at `blend + 1` frames away.
         let ramp = |dist: usize| {
             if dist > blend {
@@ -292,50 +345,66 @@ fn place(start: usize, end: usize, pos: &impl Fn(usize) -> [f64; 3]) -> ([f64; 3
     (mean, travel)
 }
 
-/// The targets of a travelling run `[start, end)` cut into steps: plants, each as long as its
-/// joint stays within `max_travel` of the plant's mean place, with `step.swing_frames` frames
-/// between one plant and the next in which the target moves on a raised arc (smootherstep
-/// along the floor, a bump of `step.lift` along `up`). The run ends with its last plant (the
-/// frames after it, too few for a swing, follow the joint's own place through the ramp);
-/// `None` when not even one plant fits.
-fn steps(
+/// The ankle's and the toe's targets of a travelling contact `[start, end)` cut into steps:
+/// plants, each as long as both joints stay within `max_travel` of their mean places in it,
+/// with `step.swing_frames` frames between one plant and the next. In a swing the ankle
+/// moves on a raised arc (smootherstep along the floor, a bump of `step.lift` along `up`) and
+/// the toe rides with it, the foot turning from the one plant's heading to the next's. The
+/// contact ends with its last plant (the frames after it, too few for a swing, follow the
+/// joints' own places through the ramp); `None` when not even one plant fits.
+fn foot_steps(
     start: usize,
     end: usize,
     max_travel: f64,
     step: Stepping,
-    pos: &impl Fn(usize) -> [f64; 3],
-) -> Option<Vec<[f64; 3]>> {
-    let mut plants: Vec<(usize, usize, [f64; 3])> = Vec::new();
+    ankle: &impl Fn(usize) -> [f64; 3],
+    toe: &impl Fn(usize) -> [f64; 3],
+) -> Option<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+    let within =
+        |a: usize, b: usize| place(a, b, ankle).1 <= max_travel && place(a, b, toe).1 <= max_travel;
+    // Each plant: its frames [a, b), the ankle's place and the toe's.
+    let mut plants: Vec<(usize, usize, [f64; 3], [f64; 3])> = Vec::new();
     let mut a = start;
     while a < end {
         let mut b = a + 1;
-        while b < end && place(a, b + 1, pos).1 <= max_travel {
+        while b < end && within(a, b + 1) {
             b += 1;
         }
-        plants.push((a, b, place(a, b, pos).0));
+        plants.push((a, b, place(a, b, ankle).0, place(a, b, toe).0));
         a = b.saturating_add(step.swing_frames);
     }
-    let &(first_start, _, _) = plants.first()?;
+    let &(first_start, _, _, _) = plants.first()?;
+    debug_assert_eq!(first_start, start);
     let stop = plants.last().map(|p| p.1)?;
-    let mut targets = Vec::with_capacity(stop - first_start);
-    for (i, &(a, b, m)) in plants.iter().enumerate() {
-        targets.extend(std::iter::repeat_n(m, b - a));
-        if let Some(&(next_a, _, next_m)) = plants.get(i + 1) {
-            let span = (next_a - b + 1) as f64;
-            for g in b..next_a {
-                let u = (g + 1 - b) as f64 / span;
-                // Smootherstep along the floor and a bump 64 u³ (1 − u)³ (1 at the middle):
-                // both start and end with zero speed and zero acceleration, so a swing adds
-                // no jerk spike where it leaves or meets a plant (a smoothstep and a sine bump
-                // raised the group's worst dancer's jerk from 373 to 486 m/s³).
-                let along = u * u * u * (u * (6.0 * u - 15.0) + 10.0);
-                let bump = step.lift * 64.0 * (u * (1.0 - u)).powi(3);
-                targets.push(add(lerp(m, next_m, along), scale(step.up, bump)));
-            }
+    let mut ankles = Vec::with_capacity(stop - start);
+    let mut toes = Vec::with_capacity(stop - start);
+    for (i, &(a, b, ma, mt)) in plants.iter().enumerate() {
+        ankles.extend(std::iter::repeat_n(ma, b - a));
+        toes.extend(std::iter::repeat_n(mt, b - a));
+        let Some(&(next_a, _, na, nt)) = plants.get(i + 1) else {
+            continue;
+        };
+        let (from, to) = (sub(mt, ma), sub(nt, na));
+        let turn = Mat3::between(from, to);
+        let span = (next_a - b + 1) as f64;
+        for g in b..next_a {
+            let u = (g + 1 - b) as f64 / span;
+            // Smootherstep along the floor and a bump 64 u³ (1 − u)³ (1 at the middle):
+            // both start and end with zero speed and zero acceleration, so a swing adds no
+            // jerk spike where it leaves or meets a plant (a smoothstep and a sine bump raised
+            // the group's worst dancer's jerk from 373 to 486 m/s³).
+            let along = u * u * u * (u * (6.0 * u - 15.0) + 10.0);
+            let bump = step.lift * 64.0 * (u * (1.0 - u)).powi(3);
+            let at = add(lerp(ma, na, along), scale(step.up, bump));
+            // The foot turns (rather than its heel-to-toe vector being interpolated, which
+            // shrinks through zero when the foot turns round).
+            let length = norm(from) + (norm(to) - norm(from)) * along;
+            let heading = slerp_from_identity(turn, along).mul_vec(from);
+            ankles.push(at);
+            toes.push(add(at, scale(heading, length / norm(from).max(1e-12))));
         }
     }
-    debug_assert_eq!(first_start, start);
-    Some(targets)
+    Some((ankles, toes))
 }
 
 /// Two-bone IK: new local rotations of `leg`'s hip, knee and ankle in `local` (one frame) so
@@ -613,6 +682,52 @@ mod tests {
         pin_planted_feet(&skel, &mut l2, &root, &SMPL_LEGS, &contacts, 4, bound);
         let plain = positions(&skel, &l2, &root);
         assert!((0..t).all(|f| norm(sub(plain[f].pos[7], before[f].pos[7])) == 0.0));
+    }
+
+    #[test]
+    fn heel_and_toe_step_together_as_one_foot() {
+        // The toe lands 5 frames before the heel, and the body yaws slowly as it glides, so
+        // stepped separately the heel's and the toe's plants would be cut at different
+        // frames: the foot, turned to point from the ankle's target to the toe's, spun in a
+        // frame (60-114 degrees in held-out group dances). Stepped as one foot it turns
+        // smoothly and neither joint jumps.
+        let t = 90;
+        let (skel, mut local, root) = gliding(t);
+        for f in 0..t {
+            local[f * 24] = Mat3::from_axis_angle([0.0, 0.004 * f as f64, 0.0]);
+        }
+        let mut ankle = vec![true; t];
+        ankle[..5].fill(false);
+        let contacts = left_leg(ankle, vec![true; t]);
+        let step = Stepping {
+            swing_frames: 6,
+            lift: 0.06,
+            up: [0.0, 1.0, 0.0],
+        };
+        pin_planted_feet_stepping(
+            &skel,
+            &mut local,
+            &root,
+            &SMPL_LEGS,
+            &contacts,
+            4,
+            0.05,
+            Some(step),
+        );
+        let after = positions(&skel, &local, &root);
+        let foot = |f: usize| sub(after[f].pos[10], after[f].pos[7]);
+        for f in 1..t {
+            for joint in [7, 10] {
+                let jump = norm(sub(after[f].pos[joint], after[f - 1].pos[joint]));
+                assert!(jump < 0.05, "frame {f}: joint {joint} jumps {jump} m");
+            }
+            let (a, b) = (foot(f - 1), foot(f));
+            let turn = (dot(a, b) / (norm(a) * norm(b)))
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+            assert!(turn < 10.0, "frame {f}: the foot turns {turn} degrees");
+        }
     }
 
     #[test]
