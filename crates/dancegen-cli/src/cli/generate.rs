@@ -206,7 +206,8 @@ pub struct GenerateArgs {
     #[arg(long)]
     pub no_foot_lock: bool,
     /// Leave the timing as generated: no time warp moving the dance's beats onto the song's
-    /// (solo, each group dancer) or the follower's onto the leader's (duet); post-processing,
+    /// (solo, each group dancer, a group edit's new parts with the kept frames around them
+    /// fixed) or the follower's onto the leader's (duet); post-processing,
     /// not part of Lodge++, ReactDance or TCDiff++; the playback speed stays within ±15 %.
     #[arg(long)]
     pub no_beat_align: bool,

@@ -7,7 +7,9 @@
 //! system does with its windows: each made run is joined to the kept frames around it and its
 //! planted feet locked (`dancegen_lodgepp::inpaint::join_made_runs`; no root lock for a dancer
 //! a formation places), the floor and the separation move only made frames (faded in from
-//! the kept ones), and the known values are spliced back exactly. `--unison` is refused: it
+//! the kept ones), and the known values are spliced back exactly. The frames made anew are
+//! warped onto the beat as a plain group dance is, each run with the kept frames around it
+//! fixed ([`crate::beat_align::align_made_runs_to_beats`]; `--no-beat-align`). `--unison` is refused: it
 //! would replace the kept dancers' own moves.
 
 use dancegen_lodgepp::inpaint::{FootLock, KnownFrames, join_made_runs};
@@ -20,6 +22,7 @@ use dancegen_tcdiffpp::sampler::GroupRequest;
 use super::group_options::{GroupOptions, MIN_GROUP_SECONDS};
 use super::group_stage::{requested_paths, sample_group, sample_options, separate, stage_report};
 use super::solo::{fade_from_kept, floor_made_frames, lift_made_frames_above_floor};
+use crate::beat_align::{BeatAlignment, align_made_runs_to_beats};
 use crate::error::GenerateError;
 use crate::song::FPS;
 use crate::system::{Dance, DanceInput, Dancer, Role};
@@ -96,6 +99,8 @@ pub(super) fn edit(
     let mut dancers: Vec<SmplMotion> = Vec::with_capacity(n);
     let mut moves: Vec<Vec<f32>> = Vec::with_capacity(n);
     let mut largest_join = 0f32;
+    let beats = song.beat_frames(&span);
+    let mut aligned_runs: Vec<BeatAlignment> = Vec::new();
     for (k, known) in own.iter().enumerate() {
         let generated: Vec<f32> = raw
             .chunks_exact(GROUP_DIMS)
@@ -114,6 +119,13 @@ pub(super) fn edit(
         largest_join = largest_join.max(largest);
         let mut m =
             Edge151::decode(&joined).map_err(|e| GenerateError::Generation(e.to_string()))?;
+        if opts.beat_align {
+            let untouched: Vec<bool> = (0..frames).map(|f| !parts[k].touched(f)).collect();
+            let (aligned, reports) = align_made_runs_to_beats(&m, &untouched, &beats)
+                .map_err(GenerateError::Generation)?;
+            m = aligned;
+            aligned_runs.extend(reports);
+        }
         let made: Vec<bool> = parts[k].root_height.iter().map(|&h| !h).collect();
         floor_made_frames(&mut m, &made)?;
         lift_made_frames_above_floor(&mut m, &made).map_err(GenerateError::Generation)?;
@@ -126,6 +138,19 @@ pub(super) fn edit(
          most {largest_join:.2} m to meet the given paths); the foot lock on the new frames \
          only"
     )];
+    if !aligned_runs.is_empty() {
+        let warped = aligned_runs.iter().filter(|a| a.passes > 0).count();
+        let mean = |f: fn(&BeatAlignment) -> f64| {
+            aligned_runs.iter().map(f).sum::<f64>() / aligned_runs.len() as f64
+        };
+        notes.push(format!(
+            "beat alignment of the new parts (the frames around them kept): {warped} of {} \
+             runs warped, alignment score {:.2} ({:.2} before)",
+            aligned_runs.len(),
+            mean(|a| a.score),
+            mean(|a| a.score_before),
+        ));
+    }
     if opts.separation {
         let largest = separate(&mut dancers, Some(&moves))?;
         notes.push(format!(
