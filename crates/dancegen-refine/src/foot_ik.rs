@@ -191,8 +191,11 @@ impl Pose {
     }
 }
 
+/// A joint's target on each frame of a run.
+type Targets = Vec<[f64; 3]>;
+
 /// A contact run's pins: its first frame and the joint's target on each of its frames.
-type Run = (usize, Vec<[f64; 3]>);
+type Run = (usize, Targets);
 
 /// The runs of planted frames, each as `[start, end)`.
 fn planted_runs(planted: &[bool]) -> Vec<(usize, usize)> {
@@ -359,7 +362,7 @@ fn foot_steps(
     step: Stepping,
     ankle: &impl Fn(usize) -> [f64; 3],
     toe: &impl Fn(usize) -> [f64; 3],
-) -> Option<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+) -> Option<(Targets, Targets)> {
     let within =
         |a: usize, b: usize| place(a, b, ankle).1 <= max_travel && place(a, b, toe).1 <= max_travel;
     // Each plant: its frames [a, b), the ankle's place and the toe's.
