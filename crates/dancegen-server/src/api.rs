@@ -14,7 +14,7 @@ use std::sync::{Arc, Mutex};
 use axum::body::Body;
 use axum::extract::multipart::MultipartRejection;
 use axum::extract::{DefaultBodyLimit, Multipart, Path, Request, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::middleware::{self, Next};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
@@ -31,8 +31,10 @@ use crate::config::{Limits, SSE_KEEP_ALIVE};
 use crate::edit_job;
 use crate::error::ApiError;
 use crate::files;
+use crate::job::{JobParams, JobState};
 use crate::jobs::Jobs;
 use crate::upload;
+use crate::{download_all, download_names};
 
 /// What every handler shares.
 #[derive(Clone)]
@@ -64,6 +66,7 @@ pub fn router(state: AppState) -> Router {
         .route("/api/jobs/{id}/events", get(events))
         .route("/api/jobs/{id}/versions", get(versions))
         .route("/api/jobs/{id}/files/{name}", get(file))
+        .route("/api/jobs/{id}/zip", get(zip_all))
         .route("/api/{*rest}", get(unknown_api))
         .fallback(crate::web::asset)
         // Only up to the response headers: an SSE stream lives on after them.
@@ -141,7 +144,13 @@ async fn submit(
     };
     let params = match &edited {
         Some((row, _)) => up.params.clone().editing(&row.params),
-        None => up.params.clone(),
+        None => JobParams {
+            song_title: up
+                .song
+                .as_ref()
+                .map(|f| download_names::song_title(&f.name)),
+            ..up.params.clone()
+        },
     };
     if let Some(song) = &up.song
         && song.bytes.len() > limit
@@ -292,9 +301,50 @@ async fn file(
         return Err(no_job(&id));
     }
     let path = files::resolve(&s.jobs.job_dir(&id), &name).ok_or_else(not_found)?;
+    // A dance file is saved under its download name (`<song>-<system>-seed<k>.<ext>`).
+    let download = s.jobs.view(&id)?.and_then(|view| {
+        let url = files::url(&id, &name);
+        view.variations.iter().find_map(|v| {
+            let kind = v.files.iter().find(|(_, u)| **u == url)?.0;
+            v.names.get(kind).cloned()
+        })
+    });
     let res = ServeFile::new(path)
         .oneshot(req)
         .await
         .map_err(|e| ApiError::internal(format!("reading {name}: {e}")))?;
-    Ok(res.map(Body::new))
+    let mut res = res.map(Body::new);
+    if let Some(n) = download
+        && let Ok(v) = HeaderValue::from_str(&download_names::content_disposition("inline", &n))
+    {
+        res.headers_mut().insert(header::CONTENT_DISPOSITION, v);
+    }
+    Ok(res)
+}
+
+/// `GET /api/jobs/{id}/zip`: every dance file of a finished job in one zip
+/// ([`crate::download_all`]).
+async fn zip_all(State(s): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    let view = s.jobs.view(&id)?.ok_or_else(|| no_job(&id))?;
+    if view.state != JobState::Done {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "the dance is not finished yet; its files can be downloaded together once it is",
+        ));
+    }
+    let dir = s.jobs.job_dir(&id);
+    let name = download_all::zip_name(&view);
+    let bytes = tokio::task::spawn_blocking(move || download_all::zip_of(&view, &dir))
+        .await
+        .map_err(|e| ApiError::internal(format!("zipping the files: {e}")))?
+        .map_err(ApiError::internal)?;
+    let disposition = download_names::content_disposition("attachment", &name);
+    Ok((
+        [
+            (header::CONTENT_TYPE, "application/zip".to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        bytes,
+    )
+        .into_response())
 }

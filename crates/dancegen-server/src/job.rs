@@ -77,6 +77,10 @@ pub struct JobParams {
     /// start and end are that job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edit: Option<EditParams>,
+    /// The uploaded song's name made safe ([`crate::download_names::song_title`]); set by the
+    /// server, not a parameter. Downloads are named after it; an edit keeps its job's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub song_title: Option<String>,
 }
 
 /// Most denoising steps a user may ask for (the models are trained with 1000 timesteps).
@@ -243,6 +247,7 @@ impl JobParams {
             variations,
             mp4,
             edit,
+            song_title: None,
         })
     }
 
@@ -253,6 +258,7 @@ impl JobParams {
         self.dancers = edited.dancers;
         self.genre = edited.genre.clone();
         self.start = edited.start;
+        self.song_title = edited.song_title.clone();
         if !self.edit.as_ref().is_some_and(|e| e.extend) {
             self.end = edited.end;
         }
@@ -340,6 +346,9 @@ fn opt_seconds(obj: &Map<String, Value>, key: &str) -> Result<Option<f64>, ApiEr
 pub struct VariationView {
     pub seed: u64,
     pub files: BTreeMap<String, String>,
+    /// The name each of `files` downloads as (same keys): `<song>-<system>-seed<k>.<ext>`
+    /// ([`crate::download_names`]).
+    pub names: BTreeMap<String, String>,
 }
 
 /// The job object of `GET /api/jobs/{id}` and of every SSE event.

@@ -12,6 +12,7 @@ use std::time::Duration;
 use dancegen_generate::CancelToken;
 use tokio::sync::watch;
 
+use crate::download_names::download_name;
 use crate::error::ApiError;
 use crate::files;
 use crate::job::{
@@ -114,9 +115,19 @@ impl Jobs {
             if let Some(u) = files.get(LEADER_NPY) {
                 by_kind.insert("leader_npy".into(), u.clone());
             }
+            let seed = row.params.seed_of(k);
+            let title = row.params.song_title.as_deref().unwrap_or("song");
+            let names = by_kind
+                .keys()
+                .map(|kind| {
+                    let name = download_name(title, &row.params.system, seed, kind);
+                    (kind.clone(), name)
+                })
+                .collect();
             variations.push(VariationView {
-                seed: row.params.seed_of(k),
+                seed,
                 files: by_kind,
+                names,
             });
         }
         JobView {

@@ -16,6 +16,8 @@ pub mod api;
 pub mod catalog;
 pub mod client;
 pub mod config;
+pub mod download_all;
+pub mod download_names;
 pub mod edit_job;
 pub mod edit_params;
 pub mod error;

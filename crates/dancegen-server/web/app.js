@@ -16,6 +16,7 @@
  *                               every change)
  *   GET    api/jobs/<id>        the job JSON (used when the event stream is refused)
  *   DELETE api/jobs/<id>        cancel
+ *   GET    api/jobs/<id>/zip    every dance file in one zip, under the names they download as
  *   (editing and versions: edit.js)
  *
  * URLs: `/?job=<id>` a job; `/?job=<id>&compare=<other>` two versions of a dance side by side.
@@ -157,6 +158,7 @@ function closeJob() {
   viewerReady = deferred();
   $('viewer').hidden = true;
   $('all-files').hidden = true;
+  $('download-all-box').hidden = true;
   $('file-list').replaceChildren();
   $('variations-box').replaceChildren();
   document.title = 'dancegen';
@@ -498,6 +500,9 @@ function showJob(job) {
   const eta = $('job-eta');
   const cancel = $('cancel');
   showFiles(job.files);
+  // Every dance file in one zip, once the dance is finished (GET /api/jobs/{id}/zip).
+  $('download-all-box').hidden = job.state !== 'done';
+  $('download-all').href = `api/jobs/${encodeURIComponent(job.id)}/zip`;
   switch (job.state) {
     case 'queued': {
       const pos = job.queue_position;

@@ -26,6 +26,7 @@ const FILE_LABELS = {
   npy: 'Joints (.npy)',
   json: 'JSON',
   mp4: 'Video (.mp4)',
+  csv: 'Face (.csv, ARKit 52)',
   leader_npy: 'Leader joints (.npy)',
 };
 
@@ -51,7 +52,7 @@ function dancerLabel(kind, labels) {
 
 /** Download links for one file map (kind or name → URL): known kinds in the order of
  * `labels` (the 3D scene first), then the rest by name. */
-export function downloadLinks(files, labels = FILE_LABELS) {
+export function downloadLinks(files, labels = FILE_LABELS, names = {}) {
   const known = Object.keys(labels);
   const rank = (k) => (known.includes(k) ? known.indexOf(k) : known.length);
   const entries = Object.entries(files ?? {}).sort(([a], [b]) => rank(a) - rank(b) || a.localeCompare(b));
@@ -60,7 +61,9 @@ export function downloadLinks(files, labels = FILE_LABELS) {
     const a = document.createElement('a');
     a.className = 'button download';
     a.href = url;
-    a.download = '';
+    // Saved as `<song>-<system>-seed<k>.<ext>` (the job's `names`), not the folder's `dance.glb`.
+    a.download = names?.[kind] ?? '';
+    if (names?.[kind]) a.title = `Saves as ${names[kind]}`;
     a.textContent = labels[kind] ?? dancerLabel(kind, labels) ?? kind;
     frag.append(a);
   }
@@ -113,7 +116,7 @@ class Stage {
     title.textContent = (variation.label ?? `Variation ${index + 1}`) + (variation.seed !== undefined ? ` · seed ${variation.seed}` : '');
     const links = document.createElement('span');
     links.className = 'downloads';
-    links.append(downloadLinks(variation.files));
+    links.append(downloadLinks(variation.files, FILE_LABELS, variation.names));
     caption.append(title, links);
     this.canvasBox = document.createElement('div');
     this.canvasBox.className = 'canvas-box';

@@ -12,6 +12,7 @@
  *   {"joints": {"1": [per variation: [dancer][24][x,y,z]], "2": ..., "5": ...},
  *    "seeked": {"1": {"audio": s, "dance": s}, ...},
  *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
+ *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
  *    "requests": [every URL the page asked for], "errors": [page errors, console errors, HTTP ≥ 400]}
  *
  * It asserts nothing (the Rust test does) and exits 0, except when the page never becomes
@@ -139,6 +140,13 @@ try {
         }))));
         return { t0, t1, moved };
       }, PLAY_MS));
+    });
+    await step('downloads', async () => {
+      result.downloads = await page.evaluate(() => ({
+        variations: [...document.querySelectorAll('#variations-box figure')].map((f) =>
+          [...f.querySelectorAll('.downloads a')].map((a) => ({ text: a.textContent, href: a.getAttribute('href'), download: a.getAttribute('download') }))),
+        all: { hidden: document.getElementById('download-all-box').hidden, href: document.getElementById('download-all').getAttribute('href') },
+      }));
     });
     process.stdout.write(`${JSON.stringify(result)}\n`);
   }

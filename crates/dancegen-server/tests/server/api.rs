@@ -88,6 +88,85 @@ fn a_solo_job_runs_streams_progress_and_serves_its_files_with_range() {
     assert!(!folder.exists());
 }
 
+/// Downloads are named for people: each variation's `names`, the files' `Content-Disposition`
+/// and the entries of the "download all" zip are `<song>-<system>-seed<k>.<ext>`, from the
+/// uploaded song's name, and the zip holds exactly the bytes of the files.
+#[test]
+fn downloads_are_named_after_the_song_and_come_as_one_zip() {
+    let s = start(Limits::default());
+    let dir = tempfile::tempdir().unwrap();
+    let song = dir.path().join("My Song (live).ogg");
+    std::fs::copy(demo_song(), &song).unwrap();
+    let r = s.submit_song(&song, r#"{"seed": 4, "end": 6, "variations": 2}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    // Before the dance is finished there is nothing to zip.
+    let early = s.get(&format!("/api/jobs/{id}/zip"));
+    if early.status != 200 {
+        assert_eq!(early.status, 409, "{}", early.json);
+        assert!(error_of(&early).contains("not finished"), "{}", early.json);
+    }
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    let mut expected = std::collections::BTreeMap::new();
+    for (k, v) in job["variations"].as_array().unwrap().iter().enumerate() {
+        let seed = 4 + k;
+        let (files, names) = (
+            v["files"].as_object().unwrap(),
+            v["names"].as_object().unwrap(),
+        );
+        assert_eq!(
+            files.keys().collect::<Vec<_>>(),
+            names.keys().collect::<Vec<_>>()
+        );
+        for kind in ["glb", "fbx", "bvh", "npz", "npy", "json"] {
+            assert_eq!(
+                names[kind],
+                format!("My-Song-(live)-solo-seed{seed}.{kind}"),
+                "{v}"
+            );
+        }
+        for (kind, url) in files {
+            let r = s.get(url.as_str().unwrap());
+            assert_eq!(r.status, 200);
+            let name = names[kind].as_str().unwrap();
+            let disposition = r.header("content-disposition").unwrap_or("");
+            assert!(
+                disposition.contains(&format!("filename=\"{name}\"")),
+                "{kind}: {disposition}"
+            );
+            expected.insert(name.to_string(), r.bytes);
+        }
+    }
+    let z = s.get(&format!("/api/jobs/{id}/zip"));
+    assert_eq!(z.status, 200, "{}", z.json);
+    assert_eq!(z.header("content-type"), Some("application/zip"));
+    assert!(
+        z.header("content-disposition")
+            .unwrap_or("")
+            .contains("filename=\"My-Song-(live)-solo-seeds4-5.zip\""),
+        "{:?}",
+        z.header("content-disposition")
+    );
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(z.bytes)).unwrap();
+    let mut got = std::collections::BTreeMap::new();
+    for i in 0..archive.len() {
+        let mut f = archive.by_index(i).unwrap();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut f, &mut bytes).unwrap();
+        got.insert(f.name().to_string(), bytes);
+    }
+    assert_eq!(
+        got.keys().collect::<Vec<_>>(),
+        expected.keys().collect::<Vec<_>>()
+    );
+    assert!(got == expected, "the zip's files differ from the downloads");
+    // The song itself is not a dance file: it has no download name and is not zipped.
+    let r = s.get(job["song"].as_str().unwrap());
+    assert_eq!(r.header("content-disposition"), None);
+    assert_eq!(s.get("/api/jobs/nosuchjob/zip").status, 404);
+}
+
 #[test]
 fn file_names_that_leave_the_job_folder_are_not_found() {
     let s = start(Limits::default());

@@ -154,6 +154,41 @@ fn check_page(report: &Value, base: &str, name: &str) {
     );
 }
 
+/// Every download link of the page saves under the job's name for it
+/// (`<song>-<system>-seed<k>.<ext>`), the face file says it is the face, and "Download all"
+/// points at the job's zip.
+fn check_downloads(report: &Value, job: &Value, name: &str) {
+    let shown = report["downloads"]["variations"].as_array().unwrap();
+    let variations = job["variations"].as_array().unwrap();
+    assert_eq!(shown.len(), variations.len(), "{name}: {report}");
+    for (links, v) in shown.iter().zip(variations) {
+        let links = links.as_array().unwrap();
+        assert_eq!(
+            links.len(),
+            v["files"].as_object().unwrap().len(),
+            "{name}: {links:?}"
+        );
+        for (kind, url) in v["files"].as_object().unwrap() {
+            let link = links
+                .iter()
+                .find(|l| l["href"] == *url)
+                .unwrap_or_else(|| panic!("{name}: no link to {url}: {links:?}"));
+            assert_eq!(link["download"], v["names"][kind], "{name} {kind}: {link}");
+            assert!(
+                link["download"]
+                    .as_str()
+                    .unwrap()
+                    .contains(&format!("-{name}-seed")),
+                "{name} {kind}: {link}"
+            );
+        }
+    }
+    let all = &report["downloads"]["all"];
+    assert_eq!(all["hidden"], false, "{name}: {all}");
+    let id = job["id"].as_str().unwrap();
+    assert_eq!(all["href"], format!("api/jobs/{id}/zip"), "{name}: {all}");
+}
+
 #[test]
 fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
     check_prerequisites();
@@ -178,6 +213,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         let files = &job["variations"][0]["files"];
         let report = view(&s, id, name);
         check_page(&report, &base, name);
+        check_downloads(&report, &job, name);
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
