@@ -158,6 +158,8 @@ pub trait DanceSystem: 'static {
     /// The edit operations its sampler applies ([`crate::edit::Edit::operations`] names); a
     /// request with another is refused before any work, naming it.
     const EDITS: &'static [&'static str] = &[];
+    /// The least music (seconds from start to end) it dances to; a shorter span is refused.
+    const MIN_SECONDS: f64;
 
     type Model: Send + Sync + 'static;
     type Options;

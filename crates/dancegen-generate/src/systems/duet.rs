@@ -160,6 +160,7 @@ impl DanceSystem for Duet {
     const DEFAULT_MODEL: &'static str = "reactdance-small";
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
     const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE];
+    const MIN_SECONDS: f64 = MIN_LEADER_FRAMES as f64 / FPS as f64;
 
     type Model = DuetModel;
     type Options = DuetOptions;

@@ -48,6 +48,7 @@ impl DanceSystem for Group {
     const DEFAULT_MODEL: &'static str = "tcdiffpp-small";
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
+    const MIN_SECONDS: f64 = super::group_options::MIN_GROUP_SECONDS;
 
     type Model = GroupModel;
     type Options = GroupOptions;

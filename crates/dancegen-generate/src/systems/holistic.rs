@@ -31,6 +31,7 @@ impl DanceSystem for Holistic {
     const DEFAULT_MODEL: &'static str = "soulnet-small";
     const PARTS: &'static [(&'static str, f64)] = &[(TOKENS, 1.0)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
+    const MIN_SECONDS: f64 = super::holistic_options::MIN_SONG_SECONDS;
 
     type Model = HolisticModel;
     type Options = HolisticOptions;

@@ -12,7 +12,7 @@ mod holistic_options;
 pub mod solo;
 
 /// A system users can name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SystemInfo {
     /// `--system NAME`.
     pub name: &'static str,
@@ -25,6 +25,8 @@ pub struct SystemInfo {
     pub available: bool,
     /// The edits it applies ([`DanceSystem::EDITS`]).
     pub edits: &'static [&'static str],
+    /// The least music it dances to, seconds ([`DanceSystem::MIN_SECONDS`]).
+    pub min_seconds: f64,
 }
 
 use crate::system::DanceSystem;
@@ -37,6 +39,7 @@ const fn shipped<S: DanceSystem>(method: &'static str) -> SystemInfo {
         default_model: S::DEFAULT_MODEL,
         available: true,
         edits: S::EDITS,
+        min_seconds: S::MIN_SECONDS,
     }
 }
 

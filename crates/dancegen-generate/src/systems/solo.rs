@@ -70,6 +70,7 @@ impl DanceSystem for Solo {
     // Measured on the demo song: the GPT's tokens take about a tenth of the generation.
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
+    const MIN_SECONDS: f64 = MIN_SONG_SECONDS;
 
     type Model = SoloModel;
     type Options = SoloOptions;
