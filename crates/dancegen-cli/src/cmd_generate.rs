@@ -34,6 +34,10 @@ pub fn run(args: &GenerateArgs, quiet: bool) -> Result<()> {
     let done = generator.run(&request, &on_progress, &CancelToken::new());
     bar.finish();
     let done = done?;
+    // Even with -q: a warning says the dance may not be what was wanted.
+    for w in &done.warnings {
+        eprintln!("warning: {w}");
+    }
     if !quiet {
         let mut out = std::io::stdout().lock();
         let notes: String = done.notes.iter().map(|n| format!("; {n}")).collect();

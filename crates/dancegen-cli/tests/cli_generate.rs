@@ -177,6 +177,53 @@ fn short_songs_and_bad_files_are_clear_errors() {
     assert!(!out.exists(), "no output on failure");
 }
 
+/// A song without a beat (here 12 s of silence) is danced, with a warning on stderr that says
+/// so; a song with a beat gets none.
+#[test]
+fn a_song_without_a_beat_is_danced_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let silent = dir.path().join("silence.wav");
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: 22_050,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut w = hound::WavWriter::create(&silent, spec).unwrap();
+    for _ in 0..12 * 22_050 {
+        w.write_sample(0i16).unwrap();
+    }
+    w.finalize().unwrap();
+    let out = dir.path().join("x.npy");
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        silent.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(out.exists());
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: no beat was found in the music from 0.0 to 12.0 s"),
+        "{err}"
+    );
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--start",
+        "10",
+        "--end",
+        "16",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+}
+
 #[test]
 fn missing_model_files_are_named() {
     let dir = tempfile::tempdir().unwrap();

@@ -54,6 +54,9 @@ pub struct Generated {
     pub summary: String,
     pub timing_breakdown: String,
     pub notes: Vec<String>,
+    /// What the user should know about the result although it was made (a song without a
+    /// beat: [`beat_warning`]); every front end shows them.
+    pub warnings: Vec<String>,
     pub timings: Timings,
     /// Files written, in request order.
     pub written: Vec<PathBuf>,
@@ -223,6 +226,14 @@ impl Generator {
         tracker.finish();
 
         let span = dance.span;
+        let beat_times_s: Vec<f64> = song
+            .beat_frames(&span)
+            .into_iter()
+            .map(|f| f as f64 / f64::from(FPS))
+            .collect();
+        let warnings = beat_warning(beat_times_s.len(), span.start_s, span.end_s)
+            .into_iter()
+            .collect();
         Ok(Generated {
             system: S::NAME,
             model_dir,
@@ -230,16 +241,13 @@ impl Generator {
             fps: FPS,
             start_s: span.start_s,
             end_s: span.end_s,
-            beat_times_s: song
-                .beat_frames(&span)
-                .into_iter()
-                .map(|f| f as f64 / f64::from(FPS))
-                .collect(),
+            beat_times_s,
             tempo_bpm: song.features.tempo_bpm,
             dancers: dance.dancers,
             summary: dance.summary,
             timing_breakdown: dance.timing_breakdown,
             notes: dance.notes,
+            warnings,
             timings: Timings {
                 load_model_s,
                 analyse_song_s,
@@ -250,6 +258,25 @@ impl Generator {
             written,
         })
     }
+}
+
+/// Fewest beats per second of danced music below which the song is said to have no beat:
+/// one every 4 s (a 15 bpm pulse, slower than any dance tempo; silence has none, a song with
+/// a beat at 60-200 bpm has 4-13 times as many).
+pub const MIN_BEATS_PER_SECOND: f64 = 0.25;
+
+/// The warning for a dance from `start_s` to `end_s` of a song in which the beat tracker found
+/// `beats` beats, when that is fewer than [`MIN_BEATS_PER_SECOND`]: the dance is made, but no
+/// model can keep a beat the music does not have (30 s of silence was danced without a word).
+pub fn beat_warning(beats: usize, start_s: f64, end_s: f64) -> Option<String> {
+    let seconds = end_s - start_s;
+    ((beats as f64) < MIN_BEATS_PER_SECOND * seconds).then(|| {
+        format!(
+            "no beat was found in the music from {start_s:.1} to {end_s:.1} s ({beats} beats in \
+             {seconds:.1} s): is it silent, or without a rhythm? The dance cannot keep a beat \
+             the music does not have"
+        )
+    })
 }
 
 /// How a job's song is recorded in its files ([`DanceRecord::song`]).
@@ -292,4 +319,21 @@ fn check_kind<S: DanceSystem>(dir: &Path) -> Result<(), GenerateError> {
             ),
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_song_without_a_beat_is_warned_of() {
+        // Silence: the beat tracker finds none.
+        let w = beat_warning(0, 0.0, 30.0).expect("a warning");
+        assert!(w.contains("0 beats in 30.0 s"), "{w}");
+        // Two beats in 10 s are fewer than one every 4 s; three are not.
+        assert!(beat_warning(2, 5.0, 15.0).is_some());
+        assert!(beat_warning(3, 5.0, 15.0).is_none());
+        // A song at 60 bpm is far from it.
+        assert!(beat_warning(60, 0.0, 60.0).is_none());
+    }
 }
