@@ -184,9 +184,11 @@ async fn submit(
     let prepared = {
         let (incoming, song_name, leader_name) =
             (incoming.clone(), song_name.clone(), leader_name.clone());
+        let asked = params.clone();
         tokio::task::spawn_blocking(move || -> Result<(), ApiError> {
             if let Some(bytes) = &song_bytes {
-                upload::check_song(&song_name, bytes.clone(), max_seconds)?;
+                let seconds = upload::check_song(&song_name, bytes.clone(), max_seconds)?;
+                upload::check_span(&asked, seconds)?;
             }
             std::fs::create_dir_all(&incoming)
                 .map_err(|e| ApiError::internal(format!("{}: {e}", incoming.display())))?;

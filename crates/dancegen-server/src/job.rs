@@ -364,6 +364,9 @@ pub struct JobView {
     pub eta_s: Option<f64>,
     /// Why the job failed, in words.
     pub error: Option<String>,
+    /// What the user should know about the finished dance, in words (a song in which no beat
+    /// was found); empty when there is nothing to say.
+    pub warnings: Vec<String>,
     /// Every file of the job (the uploaded song included), name → URL.
     pub files: BTreeMap<String, String>,
     /// URL of the uploaded song (the viewer's clock).

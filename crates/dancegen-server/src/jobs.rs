@@ -137,6 +137,7 @@ impl Jobs {
             progress: row.progress,
             eta_s: row.eta_s,
             error: row.error.clone(),
+            warnings: row.warnings.clone(),
             song: files.get(&row.song).cloned(),
             files,
             system: row.params.system.clone(),

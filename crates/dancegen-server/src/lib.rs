@@ -26,6 +26,7 @@ pub mod job;
 pub mod jobs;
 pub mod store;
 pub mod upload;
+pub mod user_words;
 pub mod versions;
 pub mod web;
 pub mod worker;

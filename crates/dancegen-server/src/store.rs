@@ -30,6 +30,8 @@ pub struct JobRow {
     pub finished: Option<f64>,
     /// Times a worker has started it (1 for a job that ran once; more after restarts).
     pub attempts: u32,
+    /// What the user should know about the finished dance (a song without a beat).
+    pub warnings: Vec<String>,
 }
 
 pub struct Store {
@@ -64,8 +66,12 @@ CREATE TABLE IF NOT EXISTS jobs (
 CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
 ";
 
-const COLUMNS: &str =
-    "id, state, stage, progress, eta_s, error, params, song, leader, created, finished, attempts";
+const COLUMNS: &str = "id, state, stage, progress, eta_s, error, params, song, leader, created, \
+     finished, attempts, warnings";
+
+/// Columns added after the first release, with their types: a database an older server made
+/// gets them when it is opened (`ALTER TABLE ... ADD COLUMN`; old rows read them as NULL).
+const ADDED_COLUMNS: [(&str, &str); 1] = [("warnings", "TEXT")];
 
 fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
     let state: String = r.get(1)?;
@@ -86,6 +92,10 @@ fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
         created: r.get(9)?,
         finished: r.get(10)?,
         attempts: r.get(11)?,
+        warnings: match r.get::<_, Option<String>>(12)? {
+            None => Vec::new(),
+            Some(text) => serde_json::from_str(&text).map_err(|e| bad(format!("warnings: {e}")))?,
+        },
     })
 }
 
@@ -101,6 +111,16 @@ impl Store {
         conn.pragma_update(None, "synchronous", "NORMAL")?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
         conn.execute_batch(SCHEMA)?;
+        for (name, kind) in ADDED_COLUMNS {
+            let has: bool = conn.query_row(
+                "SELECT count(*) > 0 FROM pragma_table_info('jobs') WHERE name = ?1",
+                [name],
+                |r| r.get(0),
+            )?;
+            if !has {
+                conn.execute_batch(&format!("ALTER TABLE jobs ADD COLUMN {name} {kind}"))?;
+            }
+        }
         let requeued: Vec<String> = {
             let mut st = conn.prepare(
                 "UPDATE jobs SET state = 'queued', stage = NULL, progress = 0, eta_s = NULL
@@ -215,14 +235,23 @@ impl Store {
     }
 
     /// Ends a running job in `state` (done, failed or cancelled).
-    pub fn finish(&self, id: &str, state: JobState, error: Option<&str>) -> rusqlite::Result<()> {
+    pub fn finish(
+        &self,
+        id: &str,
+        state: JobState,
+        error: Option<&str>,
+        warnings: &[String],
+    ) -> rusqlite::Result<()> {
         let done = state == JobState::Done;
+        let warnings = (!warnings.is_empty())
+            .then(|| serde_json::to_string(warnings).expect("strings serialise"));
         self.conn().execute(
             "UPDATE jobs SET state = ?2, error = ?3, finished = ?4, eta_s = NULL,
                  progress = CASE WHEN ?5 THEN 1.0 ELSE progress END,
-                 stage = CASE WHEN ?5 THEN 'done' ELSE stage END
+                 stage = CASE WHEN ?5 THEN 'done' ELSE stage END,
+                 warnings = ?6
              WHERE id = ?1",
-            params![id, state.as_str(), error, now(), done],
+            params![id, state.as_str(), error, now(), done, warnings],
         )?;
         Ok(())
     }
@@ -287,10 +316,37 @@ mod tests {
         assert_eq!(a.state, JobState::Queued);
         assert_eq!(s.get("b").unwrap().unwrap().state, JobState::Cancelled);
         assert_eq!(s.claim().unwrap().unwrap().id, "a");
-        s.finish("a", JobState::Done, None).unwrap();
+        s.finish("a", JobState::Done, None, &[]).unwrap();
         let a = s.get("a").unwrap().unwrap();
         assert_eq!((a.state, a.progress), (JobState::Done, 1.0));
         assert!(s.delete("a").unwrap());
         assert!(s.get("a").unwrap().is_none());
+    }
+
+    /// A database an older server made (no `warnings` column) opens, its jobs read with no
+    /// warnings, and a job finished now keeps its warnings across a reopen.
+    #[test]
+    fn an_older_database_gets_the_warnings_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let db = dir.path().join("jobs.sqlite3");
+        {
+            let conn = Connection::open(&db).unwrap();
+            conn.execute_batch(SCHEMA).unwrap();
+            conn.execute(
+                "INSERT INTO jobs (id, state, params, song, created) VALUES ('old', 'done', ?1, \
+                 'song.ogg', 0)",
+                [serde_json::to_string(&params()).unwrap()],
+            )
+            .unwrap();
+        }
+        let (s, _) = Store::open(&db).unwrap();
+        assert!(s.get("old").unwrap().unwrap().warnings.is_empty());
+        s.insert("new", &params(), "song.ogg", None).unwrap();
+        s.claim().unwrap();
+        let said = vec!["no beat was found".to_string()];
+        s.finish("new", JobState::Done, None, &said).unwrap();
+        drop(s);
+        let (s, _) = Store::open(&db).unwrap();
+        assert_eq!(s.get("new").unwrap().unwrap().warnings, said);
     }
 }

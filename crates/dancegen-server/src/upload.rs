@@ -10,6 +10,7 @@ use axum::extract::multipart::MultipartError;
 use axum::http::StatusCode;
 
 use dancegen_music::decode::{AudioSource, MonoDecoder};
+use dancegen_music::error::MusicError;
 
 use crate::error::ApiError;
 use crate::files::extension_of;
@@ -203,9 +204,7 @@ pub fn check_song(name: &str, bytes: Arc<[u8]>, max_seconds: f64) -> Result<f64,
         name: Path::new(name).to_path_buf(),
         bytes,
     };
-    let bad = |e: dancegen_music::error::MusicError| {
-        ApiError::field("song", format!("cannot read the audio: {e}"))
-    };
+    let bad = |e: MusicError| ApiError::field("song", audio_fault(&e));
     let too_long = |seconds: f64| {
         ApiError::field(
             "song",
@@ -242,12 +241,122 @@ pub fn check_song(name: &str, bytes: Arc<[u8]>, max_seconds: f64) -> Result<f64,
     Ok(samples as f64 / f64::from(rate))
 }
 
+/// What is wrong with an uploaded song the decoder refused, in a user's words: what the file
+/// is and what to do, without the decoder's internals ("unsupported feature: core (probe):
+/// no suitable format reader found" said that a text file named `.mp3` is not audio).
+pub fn audio_fault(e: &MusicError) -> String {
+    const FORMATS: &str = "WAV, MP3, OGG (Vorbis) or FLAC";
+    match e {
+        MusicError::EmptyFile { .. } => "the file is empty (0 bytes); choose a music file".into(),
+        MusicError::UnknownFormat { .. } | MusicError::NoAudioTrack { .. } => {
+            format!(
+                "this file is not audio, or not in a format this server reads ({FORMATS}); choose a music file"
+            )
+        }
+        MusicError::UnsupportedCodec { reason, .. } => format!(
+            "the audio is in a codec this server cannot decode ({reason}); convert it to {FORMATS}"
+        ),
+        MusicError::Corrupt { .. } | MusicError::Truncated { .. } => {
+            "the audio is damaged or cut short; upload it again or use another copy of the song"
+                .into()
+        }
+        MusicError::NoSamples { .. } => "the file holds no audio samples".into(),
+        MusicError::BadSampleRate { rate, .. } => {
+            format!("the audio's sample rate ({rate} Hz) is not valid; convert it to {FORMATS}")
+        }
+        MusicError::Open { .. } | MusicError::Resample(_) | MusicError::InvalidParameter(_) => {
+            "the audio could not be read; upload it again".into()
+        }
+    }
+}
+
+/// The danced span of a song `seconds` long, checked at upload as the job would find it, in
+/// words that name the field and say what to do: a song shorter than the system's least
+/// music, a start at or after the song's end, an end after it, or too little music between
+/// start and end. (Found by the job, the same faults failed it after queueing, with the
+/// server's path to the song and the command line's flags in the message.)
+pub fn check_span(params: &JobParams, seconds: f64) -> Result<(), ApiError> {
+    let system = &params.system;
+    let least = dancegen_generate::systems::by_name(system)
+        .map_err(|e| ApiError::field("system", e))?
+        .min_seconds;
+    if seconds < least {
+        return Err(ApiError::field(
+            "song",
+            format!(
+                "the song is {seconds:.1} s long; a {system} dance needs at least {least:.1} s \
+                 of music. Choose a longer song"
+            ),
+        ));
+    }
+    let start = params.start.unwrap_or(0.0);
+    if start + least > seconds {
+        return Err(ApiError::field(
+            "start",
+            format!(
+                "start {start} s leaves {:.1} s of the {seconds:.1} s song; a {system} dance \
+                 needs at least {least:.1} s of music, so start at {:.1} s or earlier",
+                (seconds - start).max(0.0),
+                seconds - least
+            ),
+        ));
+    }
+    if let Some(end) = params.end {
+        if end > seconds + END_SLACK_SECONDS {
+            return Err(ApiError::field(
+                "end",
+                format!(
+                    "end {end} s is after the song's end ({seconds:.1} s); give an end of at \
+                     most {seconds:.1} s, or leave it empty to dance to the end of the song"
+                ),
+            ));
+        }
+        if end - start < least {
+            return Err(ApiError::field(
+                "end",
+                format!(
+                    "from start {start} s to end {end} s is {:.1} s; a {system} dance needs at \
+                     least {least:.1} s of music, so end at {:.1} s or later",
+                    end - start,
+                    start + least
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// How far past the decoded length an `end` may be (the page rounds the song's length it
+/// shows; the job clamps to the last frame).
+const END_SLACK_SECONDS: f64 = 0.05;
+
 /// Reads the leader as the duet job will (blocking): an unreadable one is refused now.
 pub fn check_leader(path: &Path) -> Result<(), ApiError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if !LEADER_FORMATS.contains(&ext.as_str()) {
+        return Err(ApiError::field(
+            "leader",
+            format!(
+                "the leader must be a dance motion file ({}), not a .{ext} file",
+                LEADER_FORMATS.map(|f| format!(".{f}")).join(", ")
+            ),
+        ));
+    }
     dancegen_generate::systems::duet::load_leader(path)
         .map(|_| ())
         .map_err(|e| {
-            let text = crate::error::chain(&e).replace(&path.display().to_string(), "leader");
+            // The field names the leader already: the file's path is left out, not doubled.
+            let shown = path.display().to_string();
+            let text = crate::error::chain(&e)
+                .replace(&format!("{shown}: "), "")
+                .replace(&shown, "the leader");
             ApiError::field("leader", text)
         })
 }
+
+/// Motion formats a duet's leader may come in (the formats `dancegen convert` reads).
+const LEADER_FORMATS: [&str; 4] = ["bvh", "npz", "npy", "pkl"];

@@ -22,6 +22,7 @@ use crate::job::{
 };
 use crate::jobs::Jobs;
 use crate::store::JobRow;
+use crate::user_words;
 
 /// How often a running job's progress is written to the database (listeners hear every
 /// report at once; the database only needs it for a status after a restart).
@@ -110,15 +111,23 @@ fn run_job(
     let started = Instant::now();
     let result = generate(jobs, generator, models, row, &cancel);
     jobs.forget_cancel_token(id);
-    let (state, error) = match result {
-        Ok(()) => (JobState::Done, None),
+    let (state, error, warnings) = match result {
+        Ok(warnings) => (JobState::Done, None, warnings),
         Err(GenerateError::Cancelled) if stop.load(Ordering::SeqCst) => {
             // The server is shutting down: leave it `running`, so the next start runs it.
             tracing::info!("job {id}: interrupted by shutdown, runs again on the next start");
             return;
         }
-        Err(GenerateError::Cancelled) => (JobState::Cancelled, None),
-        Err(e) => (JobState::Failed, Some(chain(&e))),
+        Err(GenerateError::Cancelled) => (JobState::Cancelled, None, Vec::new()),
+        Err(e) => {
+            let words = user_words::for_user(
+                &chain(&e),
+                &jobs.job_dir(id),
+                &row.song,
+                row.leader.as_deref(),
+            );
+            (JobState::Failed, Some(words), Vec::new())
+        }
     };
     tracing::info!(
         "job {id}: {} in {:.1} s{}",
@@ -129,7 +138,7 @@ fn run_job(
             .map(|e| format!(": {e}"))
             .unwrap_or_default()
     );
-    if let Err(e) = jobs.store.finish(id, state, error.as_deref()) {
+    if let Err(e) = jobs.store.finish(id, state, error.as_deref(), &warnings) {
         tracing::error!("job {id}: recording its end: {e}");
     }
     jobs.publish(id);
@@ -142,8 +151,9 @@ fn generate(
     models: &[(String, PathBuf)],
     row: &JobRow,
     cancel: &CancelToken,
-) -> Result<(), GenerateError> {
+) -> Result<Vec<String>, GenerateError> {
     let dir = jobs.job_dir(&row.id);
+    let mut warnings: Vec<String> = Vec::new();
     let p = &row.params;
     let system = system_request(p, &dir, row.leader.as_deref())?;
     let model = models
@@ -218,7 +228,13 @@ fn generate(
                 }
             }
         };
-        generator.run(&request, &on_progress, cancel)?;
+        let done = generator.run(&request, &on_progress, cancel)?;
+        // Variations share the song: a warning about it is said once.
+        for w in done.warnings {
+            if !warnings.contains(&w) {
+                warnings.push(w);
+            }
+        }
         // The store's progress lags (written every STORE_PROGRESS_EVERY); bring it level before
         // the files are published, so the object listeners get does not step back.
         let whole = (k + 1) as f64 / variations as f64;
@@ -228,7 +244,7 @@ fn generate(
         // The variation's files are in place: listeners see them appear one variation at a time.
         jobs.publish(&row.id);
     }
-    Ok(())
+    Ok(warnings)
 }
 
 /// The system and its options for `p`, as `dancegen generate` builds them from its flags.

@@ -29,9 +29,9 @@ const $ = (id) => document.getElementById(id);
 /** Friendly names of the dance systems; the server's own `label` wins when it sends one. */
 const SYSTEM_LABELS = {
   solo: 'Solo — one dancer',
-  duet: 'Duet — a partner for a leader you give',
+  duet: 'Duet — partner for a leader',
   group: 'Group — 2 to 5 dancers',
-  holistic: 'Holistic — body, hands and face',
+  holistic: 'Holistic — hands and face',
 };
 
 /** What each job stage means to a user; unknown stages are shown by their own name. */
@@ -126,8 +126,10 @@ function stageLabel(stage) {
   return words.charAt(0).toUpperCase() + words.slice(1);
 }
 
+/** A file size in words: bytes below 1 KB (an empty file is "0 B", not "1 KB"), then KB, MB. */
 function formatSize(bytes) {
-  if (bytes < 1024 * 1024) return `${Math.max(1, Math.round(bytes / 1024))} KB`;
+  if (bytes < 1024) return `${bytes} B`;
+  if (bytes < 1024 * 1024) return `${Math.round(bytes / 1024)} KB`;
   return `${(bytes / 1024 / 1024).toFixed(1)} MB`;
 }
 
@@ -159,6 +161,7 @@ function closeJob() {
   $('viewer').hidden = true;
   $('all-files').hidden = true;
   $('download-all-box').hidden = true;
+  $('job-warnings').hidden = true;
   $('file-list').replaceChildren();
   $('variations-box').replaceChildren();
   document.title = 'dancegen';
@@ -258,6 +261,17 @@ function wireForm() {
   const zone = $('drop-zone');
   const input = $('song');
   input.addEventListener('change', () => setSong(input.files[0]));
+  // The zone is a tab stop: Enter and Space open the file picker, as a button's would.
+  zone.addEventListener('keydown', (e) => {
+    if (e.target !== zone || (e.key !== 'Enter' && e.key !== ' ')) return;
+    e.preventDefault();
+    input.click();
+  });
+  // A phone or tablet has no file to drag: say what to do there.
+  if (matchMedia('(hover: none) and (pointer: coarse)').matches) {
+    $('drop-words').textContent = 'Choose a song';
+    $('drop-or').textContent = '(tap here)';
+  }
   for (const type of ['dragenter', 'dragover']) {
     zone.addEventListener(type, (e) => { e.preventDefault(); zone.classList.add('dragging'); });
   }
@@ -301,6 +315,7 @@ function readParams() {
   if (!system || !systems.has(system)) fail('Choose a kind of dance.', 'system');
   const song = $('song').files[0];
   if (!song) fail('Choose a song first: drop it on the box or click the box.', 'song');
+  if (song.size === 0) fail(`“${song.name}” is empty (0 B): choose a music file.`, 'song');
   const params = { system };
   const number = (id, { integer = false, min = 0, max = Infinity, label }) => {
     const raw = $(id).value.trim();
@@ -500,6 +515,7 @@ function showJob(job) {
   const eta = $('job-eta');
   const cancel = $('cancel');
   showFiles(job.files);
+  showWarnings(job.warnings);
   // Every dance file in one zip, once the dance is finished (GET /api/jobs/{id}/zip).
   $('download-all-box').hidden = job.state !== 'done';
   $('download-all').href = `api/jobs/${encodeURIComponent(job.id)}/zip`;
@@ -544,6 +560,18 @@ function showJob(job) {
     default:
       status.textContent = `Unknown job state “${job.state}”.`;
   }
+}
+
+/** The job's warnings (job.warnings: sentences), one list item each; hidden when none. */
+function showWarnings(warnings) {
+  const list = $('job-warnings');
+  const items = (warnings ?? []).map((w) => {
+    const li = document.createElement('li');
+    li.textContent = `Note: ${w}.`;
+    return li;
+  });
+  list.replaceChildren(...items);
+  list.hidden = items.length === 0;
 }
 
 function showFiles(files) {

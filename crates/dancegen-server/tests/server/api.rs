@@ -167,6 +167,132 @@ fn downloads_are_named_after_the_song_and_come_as_one_zip() {
     assert_eq!(s.get("/api/jobs/nosuchjob/zip").status, 404);
 }
 
+/// A mono 16-bit WAV of `seconds` of a 220 Hz tone at 22,050 Hz.
+fn tone_wav(seconds: f64) -> Vec<u8> {
+    wav(seconds, 8000.0)
+}
+
+/// A mono 16-bit WAV of `seconds` of a 220 Hz tone of peak `amplitude` (0: silence).
+fn wav(seconds: f64, amplitude: f64) -> Vec<u8> {
+    let spec = hound::WavSpec {
+        channels: 1,
+        sample_rate: 22_050,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    let mut w = hound::WavWriter::new(&mut bytes, spec).unwrap();
+    for i in 0..(seconds * 22_050.0) as u32 {
+        let x = (std::f64::consts::TAU * 220.0 * f64::from(i) / 22_050.0).sin();
+        w.write_sample((x * amplitude) as i16).unwrap();
+    }
+    w.finalize().unwrap();
+    bytes.into_inner()
+}
+
+/// A song without a beat (silence) is danced, and the job says so in `warnings`; a song with
+/// a beat has none.
+#[test]
+fn a_song_without_a_beat_is_danced_with_a_warning() {
+    let s = start(Limits::default());
+    let silent = s.submit(&[
+        ("params", None, br#"{"seed": 1}"#),
+        ("song", Some("quiet.wav"), &wav(8.0, 0.0)),
+    ]);
+    assert_eq!(silent.status, 202, "{}", silent.json);
+    let beat = s.submit_song(&demo_song(), r#"{"seed": 1, "start": 10, "end": 16}"#);
+    assert_eq!(beat.status, 202, "{}", beat.json);
+    let job = s.wait(silent.json["id"].as_str().unwrap(), JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    let warnings = job["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 1, "{job}");
+    assert!(
+        warnings[0]
+            .as_str()
+            .unwrap()
+            .starts_with("no beat was found in the music from 0.0 to 8.0 s"),
+        "{warnings:?}"
+    );
+    let job = s.wait(beat.json["id"].as_str().unwrap(), JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    assert_eq!(job["warnings"], serde_json::json!([]), "{job}");
+}
+
+/// What used to be accepted and then failed in the job (or failed in the decoder's or the
+/// command line's words) is refused at upload, naming the field and saying what to do, with
+/// no server path or flag in the message.
+#[test]
+fn songs_spans_and_leaders_are_checked_at_upload_in_words() {
+    let s = start(Limits::default());
+    let song = std::fs::read(demo_song()).unwrap();
+    let submit = |params: &str, name: &str, bytes: &[u8]| {
+        s.submit(&[
+            ("params", None, params.as_bytes()),
+            ("song", Some(name), bytes),
+        ])
+    };
+    let refused = |r: &Reply, field: &str, words: &str| {
+        assert_eq!(r.status, 400, "{}", r.json);
+        assert_eq!(r.json["field"], field, "{}", r.json);
+        let e = error_of(r);
+        assert!(e.contains(words), "{e}");
+        assert!(
+            !e.contains('/') && !e.contains("--"),
+            "a path or a flag: {e}"
+        );
+    };
+    // The demo song is 45 s; the solo system needs 2 s of music.
+    refused(
+        &submit(r#"{"seed": 1}"#, "clip.wav", &tone_wav(0.5)),
+        "song",
+        "the song is 0.5 s long; a solo dance needs at least 2.0 s of music",
+    );
+    refused(
+        &submit(r#"{"start": 500}"#, "demo.ogg", &song),
+        "start",
+        "start at 43.0 s or earlier",
+    );
+    refused(
+        &submit(r#"{"start": 44}"#, "demo.ogg", &song),
+        "start",
+        "leaves 1.0 s of the 45.0 s song",
+    );
+    refused(
+        &submit(r#"{"end": 60}"#, "demo.ogg", &song),
+        "end",
+        "after the song's end (45.0 s)",
+    );
+    refused(
+        &submit(r#"{"start": 10, "end": 11}"#, "demo.ogg", &song),
+        "end",
+        "end at 12.0 s or later",
+    );
+    refused(
+        &submit(
+            r#"{"system": "group", "dancers": 3}"#,
+            "clip.wav",
+            &tone_wav(2.2),
+        ),
+        "song",
+        "a group dance needs at least 2.5 s",
+    );
+    refused(
+        &submit(r#"{}"#, "notes.mp3", b"these are my notes, not a song\n"),
+        "song",
+        "this file is not audio, or not in a format this server reads",
+    );
+    let r = s.submit(&[
+        ("params", None, br#"{"system": "duet"}"#),
+        ("song", Some("demo.ogg"), &song),
+        ("leader", Some("partner.ogg"), &song),
+    ]);
+    refused(&r, "leader", "the leader must be a dance motion file");
+    assert!(!error_of(&r).contains("leader: leader"), "{}", r.json);
+    // Right at the bounds is accepted.
+    let ok = submit(r#"{"start": 43, "end": 45}"#, "demo.ogg", &song);
+    assert_eq!(ok.status, 202, "{}", ok.json);
+}
+
 #[test]
 fn file_names_that_leave_the_job_folder_are_not_found() {
     let s = start(Limits::default());
@@ -281,14 +407,24 @@ fn limits_and_bad_input_get_clear_json_errors() {
         assert!(error_of(&r).starts_with(field), "{what}: {}", r.json);
     }
 
-    // Audio the decoder cannot read: 400 with the decoder's words.
+    // Audio the decoder cannot read: 400 saying what the file is, not the decoder's internals.
     let noise: Vec<u8> = (0..50_000u32)
         .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
         .collect();
     let r = s.submit(&[("song", Some("song.mp3"), &noise)]);
     assert_eq!(r.status, 400, "{}", r.json);
     assert_eq!(r.json["field"], "song");
-    assert!(error_of(&r).contains("cannot read the audio"), "{}", r.json);
+    let e = error_of(&r);
+    assert!(
+        e.contains("is not audio") || e.contains("damaged or cut short"),
+        "{}",
+        r.json
+    );
+    assert!(
+        !e.contains("probe") && !e.contains("song.mp3"),
+        "{}",
+        r.json
+    );
 
     // A song over the duration limit: 400 naming the limit.
     let r = s.submit_song(&demo_song(), "");

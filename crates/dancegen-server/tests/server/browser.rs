@@ -359,3 +359,58 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
     );
     assert_eq!(cmp["editBoxShown"], false, "{cmp}");
 }
+
+/// The song form with the keyboard and on a phone (issue 45): the drop zone is a tab stop
+/// that Enter and Space open the file picker from; an empty file shows as "0 B" and is refused
+/// before upload, naming the field; on a touch screen the zone says "Choose a song", and every
+/// dance system's name fits its drop-down.
+#[test]
+fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty.wav");
+    std::fs::write(&empty, b"").unwrap();
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("form-shots");
+    let out = Command::new("node")
+        .arg(browser_dir().join("form_check.mjs"))
+        .arg(s.server.url())
+        .arg(&shots)
+        .arg(&empty)
+        .output()
+        .expect("this test needs node (Node.js) on the PATH");
+    assert!(
+        out.status.success(),
+        "form_check failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    println!("form: {r}; the phone's page in {}", shots.display());
+    assert_eq!(r["errors"], serde_json::json!([]), "{r}");
+    let desk = &r["desktop"];
+    assert_eq!(desk["focused"], "drop-zone", "{desk}");
+    assert_eq!(desk["enter"], true, "Enter on the drop zone: {desk}");
+    assert_eq!(desk["space"], true, "Space on the drop zone: {desk}");
+    assert_eq!(desk["name"], "empty.wav · 0 B", "{desk}");
+    assert!(
+        desk["notice"]
+            .as_str()
+            .unwrap_or("")
+            .contains("is empty (0 B)"),
+        "{desk}"
+    );
+    assert_eq!(desk["invalid"], "song", "{desk}");
+    let phone = &r["phone"];
+    assert!(
+        phone["words"]
+            .as_str()
+            .unwrap()
+            .starts_with("Choose a song"),
+        "{phone}"
+    );
+    let room = phone["room"].as_f64().unwrap();
+    for o in phone["options"].as_array().unwrap() {
+        let width = o[1].as_f64().unwrap();
+        assert!(width <= room, "{o} is cut: {width:.0} px in {room:.0} px");
+    }
+}

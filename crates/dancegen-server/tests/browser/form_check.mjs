@@ -1,0 +1,111 @@
+#!/usr/bin/env node
+/**
+ * Drives the song form of the web app in headless Chromium, with the keyboard and on a phone,
+ * and reports what it showed, for the server's Rust test to check:
+ *
+ *   node form_check.mjs <base_url> <out_dir> <empty_file>
+ *
+ * Desktop (1280 × 900): tabs to the drop zone, presses Enter, and, when a file chooser opens,
+ * gives it <empty_file> (0 bytes); presses Space on the zone again; then submits the form.
+ * Phone (375 × 667, touch): reads the drop zone's words and how wide each dance system's name
+ * is against the room its select has. Screenshots: <out_dir>/phone.png. Prints ONE JSON line:
+ *
+ *   {"desktop": {"focused": id of the element focused after the tabs, "enter": chooser opened,
+ *    "space": chooser opened, "name": the chosen file's line, "notice": the message after
+ *    submit, "invalid": the field marked invalid},
+ *    "phone": {"words": drop zone text, "room": px for the text, "options": [[text, px]]},
+ *    "errors": [page errors]}
+ *
+ * It asserts nothing (the Rust test does) and exits 0, except when the page never shows its
+ * form within 60 s: then it exits 1 with the reason on stderr.
+ */
+import { mkdirSync } from 'node:fs';
+import { join } from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
+const CHOOSER_MS = 3000;
+
+const [baseArg, outDir, emptyFile] = process.argv.slice(2);
+if (!baseArg || !outDir || !emptyFile) {
+  console.error('usage: node form_check.mjs <base_url> <out_dir> <empty_file>');
+  process.exit(2);
+}
+const base = baseArg.replace(/\/+$/, '');
+mkdirSync(outDir, { recursive: true });
+const errors = [];
+const result = { desktop: {}, phone: {}, errors };
+
+const browser = await puppeteer.launch({
+  executablePath: CHROMIUM,
+  headless: true,
+  args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
+});
+let exitCode = 0;
+try {
+  const open = async (page) => {
+    page.on('pageerror', (e) => errors.push(`page error: ${e.message}`));
+    page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
+    await page.goto(`${base}/`, { waitUntil: 'networkidle0' });
+    // The systems are loaded when the select is enabled.
+    await page.waitForSelector('#system:not([disabled])', { timeout: 60_000 });
+  };
+  /** Whether pressing `key` on the focused drop zone opens a file chooser (and the chooser). */
+  const chooserOn = async (page, key) => {
+    const waiting = page.waitForFileChooser({ timeout: CHOOSER_MS }).catch(() => null);
+    await page.keyboard.press(key);
+    return waiting;
+  };
+
+  const desk = await browser.newPage();
+  await desk.setViewport({ width: 1280, height: 900 });
+  await open(desk);
+  // Tab from the page's start until the drop zone has the focus (at most 10 stops).
+  for (let i = 0; i < 10; i++) {
+    await desk.keyboard.press('Tab');
+    if (await desk.evaluate(() => document.activeElement?.id === 'drop-zone')) break;
+  }
+  result.desktop.focused = await desk.evaluate(() => document.activeElement?.id ?? null);
+  const chooser = await chooserOn(desk, 'Enter');
+  result.desktop.enter = chooser !== null;
+  if (chooser) await chooser.accept([emptyFile]);
+  await desk.focus('#drop-zone');
+  const again = await chooserOn(desk, 'Space');
+  result.desktop.space = again !== null;
+  if (again) await again.cancel();
+  result.desktop.name = await desk.$eval('#song-name', (e) => (e.hidden ? null : e.textContent));
+  await desk.click('#submit');
+  await new Promise((r) => setTimeout(r, 300));
+  result.desktop.notice = await desk.$eval('#notice', (e) => (e.hidden ? null : e.textContent));
+  result.desktop.invalid = await desk.evaluate(() => document.querySelector('[aria-invalid="true"]')?.id ?? null);
+
+  const phone = await browser.newPage();
+  await phone.emulate({
+    viewport: { width: 375, height: 667, deviceScaleFactor: 2, isMobile: true, hasTouch: true },
+    userAgent: 'Mozilla/5.0 (Linux; Android 14) AppleWebKit/537.36 (KHTML, like Gecko) Chrome/130.0 Mobile Safari/537.36',
+  });
+  await open(phone);
+  result.phone = await phone.evaluate(() => {
+    const zone = document.querySelector('#drop-zone label');
+    const select = document.getElementById('system');
+    const style = getComputedStyle(select);
+    const ctx = document.createElement('canvas').getContext('2d');
+    ctx.font = `${style.fontWeight} ${style.fontSize} ${style.fontFamily}`;
+    // The text's room: the select's inner width less its padding and the drop-down arrow.
+    const arrow = 24;
+    const room = select.clientWidth - parseFloat(style.paddingLeft) - parseFloat(style.paddingRight) - arrow;
+    return {
+      words: zone.textContent.replace(/\s+/g, ' ').trim(),
+      room,
+      options: [...select.options].map((o) => [o.textContent, ctx.measureText(o.textContent).width]),
+    };
+  });
+  await phone.screenshot({ path: join(outDir, 'phone.png'), fullPage: true });
+} catch (e) {
+  console.error(`form_check: ${e.message}`);
+  exitCode = 1;
+} finally {
+  await browser.close().catch(() => {});
+}
+if (exitCode === 0) process.stdout.write(`${JSON.stringify(result)}\n`);
+process.exit(exitCode);
