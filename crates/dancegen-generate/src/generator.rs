@@ -20,6 +20,7 @@ use crate::systems::duet::Duet;
 use crate::systems::group::Group;
 use crate::systems::holistic::Holistic;
 use crate::systems::solo::Solo;
+use crate::time_plan::{self, MeasuredSpeeds};
 
 /// Where a job's time went (seconds).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -69,6 +70,8 @@ pub struct Generator {
     device: Device,
     /// Loaded models by system and canonical folder.
     models: Mutex<HashMap<(TypeId, PathBuf), Arc<dyn Any + Send + Sync>>>,
+    /// This machine's speeds, learnt from finished jobs, for honest progress.
+    speeds: MeasuredSpeeds,
 }
 
 impl Generator {
@@ -78,6 +81,7 @@ impl Generator {
             locator,
             device: dancegen_nn::device::inference(),
             models: Mutex::new(HashMap::new()),
+            speeds: MeasuredSpeeds::default(),
         }
     }
 
@@ -165,16 +169,24 @@ impl Generator {
             Some(d) => d.clone(),
             None => self.locator.find(S::DEFAULT_MODEL, S::NAME)?,
         };
-        // Shares of the job in rough seconds on 2 cores (the ETA extrapolates from the real
-        // time spent, so these only need to be in proportion).
+        // Each stage's expected seconds ([`crate::time_plan`]): the ETA extrapolates from the
+        // time spent, so the shares must follow the time the stages take, which grows with
+        // the song (analysis) and with the music danced (the dance).
         let load_share = if self.is_cached::<S>(&model_dir) {
             0.0
         } else {
-            0.5
+            LOAD_MODEL_SECONDS
         };
-        let mut plan = vec![(stage::LOAD_MODEL, load_share), (stage::ANALYSE_SONG, 1.5)];
-        const GENERATE_SECONDS: f64 = 4.0;
-        plan.extend(S::PARTS.iter().map(|&(p, w)| (p, w * GENERATE_SECONDS)));
+        let song_s =
+            time_plan::song_seconds_hint(&request.song).unwrap_or(time_plan::UNKNOWN_SONG_SECONDS);
+        let danced_s = time_plan::danced_seconds(song_s, request.common.start, request.common.end);
+        let analyse_s = time_plan::ANALYSE_FIXED_SECONDS + song_s * self.speeds.analyse();
+        let dance_s = danced_s * self.speeds.generate(S::NAME, S::SECONDS_PER_DANCED_SECOND);
+        let mut plan = vec![
+            (stage::LOAD_MODEL, load_share),
+            (stage::ANALYSE_SONG, analyse_s),
+        ];
+        plan.extend(S::PARTS.iter().map(|&(p, w)| (p, w * dance_s)));
         plan.push((stage::WRITE_OUTPUTS, output::estimated_seconds(&planned)));
         let tracker = Tracker::new(plan, on_progress, cancel);
 
@@ -203,6 +215,11 @@ impl Generator {
             },
         )?;
         let generate_s = t.elapsed().as_secs_f64();
+        self.speeds.learn(
+            S::NAME,
+            (analyse_song_s, song.seconds()),
+            (generate_s, dance.span.end_s - dance.span.start_s),
+        );
 
         tracker.begin(stage::WRITE_OUTPUTS)?;
         let t = Instant::now();
@@ -259,6 +276,9 @@ impl Generator {
         })
     }
 }
+
+/// Seconds loading a model from disk takes in the time plan (the first job of a system).
+const LOAD_MODEL_SECONDS: f64 = 2.0;
 
 /// Fewest beats per second of danced music below which the song is said to have no beat:
 /// one every 4 s (a 15 bpm pulse, slower than any dance tempo; silence has none, a song with

@@ -41,6 +41,7 @@ pub mod request;
 pub mod song;
 pub mod system;
 pub mod systems;
+pub mod time_plan;
 
 pub use error::GenerateError;
 pub use generator::{Generated, Generator, Timings};

@@ -373,7 +373,12 @@ pub(crate) fn write_all(
             // with the staging folder.
             let frames = |rate: f32| {
                 scene.stream(rate).enumerate().map_while(move |(i, img)| {
-                    tracker.advance(stage::WRITE_OUTPUTS, base + i + 1, total);
+                    tracker.advance_as(
+                        stage::RENDER_VIDEO,
+                        stage::WRITE_OUTPUTS,
+                        base + i + 1,
+                        total,
+                    );
                     tracker.check().is_ok().then_some(img)
                 })
             };

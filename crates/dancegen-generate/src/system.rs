@@ -160,6 +160,10 @@ pub trait DanceSystem: 'static {
     const EDITS: &'static [&'static str] = &[];
     /// The least music (seconds from start to end) it dances to; a shorter span is refused.
     const MIN_SECONDS: f64;
+    /// Seconds its generation takes per second of danced music on the 2-core reference
+    /// machine: the first job's time plan ([`crate::time_plan`]); later jobs use this
+    /// machine's measured speed.
+    const SECONDS_PER_DANCED_SECOND: f64;
 
     type Model: Send + Sync + 'static;
     type Options;

@@ -40,6 +40,8 @@ const STAGE_LABELS = {
   analyse_song: 'Listening to the song',
   choreography: 'Planning the choreography',
   denoising: 'Creating the movement',
+  tokens: 'Creating the movement',
+  render_video: 'Rendering the video',
   write_outputs: 'Saving the files',
   render_mp4: 'Making the video',
   preview: 'Making the video',
@@ -120,7 +122,7 @@ function formatEta(s) {
 }
 
 function stageLabel(stage) {
-  if (!stage) return 'Working';
+  if (!stage) return 'Starting';
   if (STAGE_LABELS[stage]) return STAGE_LABELS[stage];
   const words = String(stage).replace(/_/g, ' ');
   return words.charAt(0).toUpperCase() + words.slice(1);
@@ -534,7 +536,11 @@ function showJob(job) {
     }
     case 'running': {
       const p = Math.min(Math.max(Number(job.progress) || 0, 0), 1);
-      status.textContent = `${stageLabel(job.stage)}… ${Math.floor(p * 100)} %`;
+      // Several variations run one after the other: say which one is being made.
+      const n = Number(job.params?.variations) || 1;
+      const k = Math.min(n, Math.floor(p * n) + 1);
+      const which = n > 1 ? ` (variation ${k} of ${n})` : '';
+      status.textContent = `${stageLabel(job.stage)}${which}… ${Math.floor(p * 100)} %`;
       bar.hidden = false;
       bar.value = p;
       eta.textContent = formatEta(job.eta_s);
@@ -551,11 +557,13 @@ function showJob(job) {
       document.title = 'dancegen — failed';
       failJob(`The dance could not be made: ${job.error || 'the server gave no reason'}.`);
       status.textContent = 'The dance could not be made.';
+      eta.textContent = '';
       break;
     case 'cancelled':
       document.title = 'dancegen — cancelled';
       failJob(job.error ? `This job was cancelled: ${job.error}` : 'This job was cancelled.');
       status.textContent = 'Cancelled.';
+      eta.textContent = '';
       break;
     default:
       status.textContent = `Unknown job state “${job.state}”.`;

@@ -161,6 +161,7 @@ impl DanceSystem for Duet {
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
     const EDITS: &'static [&'static str] = &[edit::REGENERATE, edit::CONTINUE];
     const MIN_SECONDS: f64 = MIN_LEADER_FRAMES as f64 / FPS as f64;
+    const SECONDS_PER_DANCED_SECOND: f64 = 0.3;
 
     type Model = DuetModel;
     type Options = DuetOptions;

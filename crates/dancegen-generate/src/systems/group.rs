@@ -49,6 +49,8 @@ impl DanceSystem for Group {
     const PARTS: &'static [(&'static str, f64)] = &[(DENOISING, 1.0)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
     const MIN_SECONDS: f64 = super::group_options::MIN_GROUP_SECONDS;
+    // 5 dancers × 60 s in 14 s (models/tcdiffpp-small/MODEL_CARD.md).
+    const SECONDS_PER_DANCED_SECOND: f64 = 0.25;
 
     type Model = GroupModel;
     type Options = GroupOptions;

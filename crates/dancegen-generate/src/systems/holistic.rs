@@ -32,6 +32,7 @@ impl DanceSystem for Holistic {
     const PARTS: &'static [(&'static str, f64)] = &[(TOKENS, 1.0)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
     const MIN_SECONDS: f64 = super::holistic_options::MIN_SONG_SECONDS;
+    const SECONDS_PER_DANCED_SECOND: f64 = 0.2;
 
     type Model = HolisticModel;
     type Options = HolisticOptions;

@@ -71,6 +71,7 @@ impl DanceSystem for Solo {
     const PARTS: &'static [(&'static str, f64)] = &[(CHOREOGRAPHY, 0.1), (DENOISING, 0.9)];
     const EDITS: &'static [&'static str] = &edit::OPERATIONS;
     const MIN_SECONDS: f64 = MIN_SONG_SECONDS;
+    const SECONDS_PER_DANCED_SECOND: f64 = 0.3;
 
     type Model = SoloModel;
     type Options = SoloOptions;
