@@ -13,8 +13,8 @@ use std::sync::{Arc, Mutex};
 
 use axum::body::Body;
 use axum::extract::multipart::MultipartRejection;
-use axum::extract::{DefaultBodyLimit, Multipart, Path, Request, State};
-use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::extract::{DefaultBodyLimit, FromRequest, Multipart, Path, Request, State};
+use axum::http::{HeaderValue, StatusCode, header};
 use axum::middleware::{self, Next};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
@@ -111,27 +111,49 @@ async fn unknown_api() -> ApiError {
     ApiError::not_found("no such API route")
 }
 
+/// Most bytes of an upload over the limit that are read and dropped before the 413: a client
+/// that sends its whole body before reading the answer (a plain HTTP client; browsers and curl
+/// read early) otherwise got a reset connection instead of the JSON. Beyond this the
+/// connection is closed; the body deadline bounds the time.
+const DRAIN_MAX_BYTES: usize = 1 << 30;
+
 async fn submit(
     State(s): State<AppState>,
-    headers: HeaderMap,
-    form: Result<Multipart, MultipartRejection>,
+    req: Request,
 ) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
     let limit = s.limits.upload_bytes;
-    let declared = headers
+    let declared = req
+        .headers()
         .get(header::CONTENT_LENGTH)
         .and_then(|v| v.to_str().ok())
         .and_then(|v| v.parse::<usize>().ok());
-    if declared.is_some_and(|n| n > limit + FORM_OVERHEAD) {
+    if let Some(n) = declared.filter(|&n| n > limit + FORM_OVERHEAD) {
+        // Answer at once (a client that waits for it reads it before sending), and read the
+        // body on, dropping it, for a client that sends it all first.
+        if n <= DRAIN_MAX_BYTES {
+            let mut body = req.into_body().into_data_stream();
+            tokio::spawn(async move {
+                let mut read = 0usize;
+                while let Some(Ok(chunk)) = body.next().await {
+                    read += chunk.len();
+                    if read >= n {
+                        break;
+                    }
+                }
+            });
+        }
         return Err(ApiError::new(
             StatusCode::PAYLOAD_TOO_LARGE,
             format!(
                 "upload of {:.1} MB is larger than the limit of {} MB",
-                declared.unwrap_or(0) as f64 / (1 << 20) as f64,
+                n as f64 / (1 << 20) as f64,
                 limit >> 20
             ),
         ));
     }
-    let form = form.map_err(|e| ApiError::new(e.status(), e.body_text()))?;
+    let form = Multipart::from_request(req, &s)
+        .await
+        .map_err(|e: MultipartRejection| ApiError::new(e.status(), e.body_text()))?;
     let up = upload::read(form, limit, s.limits.max_variations).await?;
     // After the body is read, so the client (a browser still sending the song) gets the 429
     // rather than a connection closed under it; before the song is decoded, so a full queue

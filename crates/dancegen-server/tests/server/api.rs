@@ -476,6 +476,42 @@ fn raw_exchange(addr: std::net::SocketAddr, request: &str) -> String {
     String::from_utf8_lossy(&reply).into_owned()
 }
 
+/// An upload over the limit from a plain client that sends its whole body before it reads
+/// (no `Expect: 100-continue`) gets the 413 and its JSON, not a reset connection.
+#[test]
+fn an_oversized_upload_from_a_plain_client_gets_its_413() {
+    use std::io::{Read, Write};
+    let s = start(Limits {
+        upload_bytes: 1 << 20,
+        ..Limits::default()
+    });
+    let boundary = "----plainclient";
+    let head = format!(
+        "--{boundary}\r\nContent-Disposition: form-data; name=\"song\"; \
+         filename=\"big.wav\"\r\nContent-Type: audio/wav\r\n\r\n"
+    );
+    let tail = format!("\r\n--{boundary}--\r\n");
+    let song = vec![0u8; 6 << 20];
+    let length = head.len() + song.len() + tail.len();
+    let request = format!(
+        "POST /api/jobs HTTP/1.1\r\nHost: test\r\nContent-Type: multipart/form-data; \
+         boundary={boundary}\r\nContent-Length: {length}\r\nConnection: close\r\n\r\n"
+    );
+    let mut tcp = std::net::TcpStream::connect(s.server.addr).unwrap();
+    tcp.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    // Everything first, as such a client does; a reset shows here as a write error.
+    for part in [request.as_bytes(), head.as_bytes(), &song, tail.as_bytes()] {
+        tcp.write_all(part)
+            .expect("the server closed the connection under the upload");
+    }
+    let mut reply = Vec::new();
+    tcp.read_to_end(&mut reply)
+        .expect("the server reset the connection");
+    let reply = String::from_utf8_lossy(&reply);
+    assert!(reply.starts_with("HTTP/1.1 413"), "{reply}");
+    assert!(reply.contains("larger than the limit of 1 MB"), "{reply}");
+}
+
 #[test]
 fn a_slow_upload_is_cut_off_at_the_body_deadline() {
     use std::io::{Read, Write};
