@@ -101,7 +101,7 @@ pub fn run(args: &RenderArgs, quiet: bool) -> Result<()> {
                     args.width,
                     args.height,
                     fps,
-                    args.audio.as_deref(),
+                    args.audio.as_deref().map(write::AudioClip::whole),
                 )
                 .with_context(|| format!("writing {}", args.output.display()))?
             };

@@ -224,6 +224,46 @@ fn a_song_without_a_beat_is_danced_with_a_warning() {
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
 
+/// The MP4 of a dance keeps the song's stereo, cut to the danced span: the sound is the
+/// song's own file decoded by ffmpeg from `--start` for the dance's length (it used to be a
+/// mono WAV of the analysis decode).
+#[test]
+fn the_video_keeps_the_songs_stereo_for_the_danced_span() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("v.mp4");
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--start",
+        "10",
+        "--end",
+        "14",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let probe = std::process::Command::new("ffprobe")
+        .args(["-v", "error", "-select_streams", "a:0"])
+        .args([
+            "-show_entries",
+            "stream=channels,duration",
+            "-of",
+            "csv=p=0",
+        ])
+        .arg(&out)
+        .output()
+        .expect("ffprobe comes with ffmpeg (tools/test.sh installs it)");
+    let text = String::from_utf8_lossy(&probe.stdout);
+    let fields: Vec<&str> = text.trim().split(',').collect();
+    assert_eq!(fields.first(), Some(&"2"), "audio stream: {text}");
+    let seconds: f64 = fields[1].parse().unwrap();
+    assert!(
+        (seconds - 4.0).abs() < 0.1,
+        "the sound lasts {seconds} s: {text}"
+    );
+}
+
 #[test]
 fn missing_model_files_are_named() {
     let dir = tempfile::tempdir().unwrap();

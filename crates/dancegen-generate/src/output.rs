@@ -385,15 +385,19 @@ pub(crate) fn write_all(
             let written = if p.format == OutputFormat::Gif {
                 write::write_gif(&tmp, frames(GIF_FPS), GIF_FPS)
             } else {
-                let audio =
-                    crate::song::segment_wav(&song.source, dance.span.start_s, dance.span.end_s)?;
+                let song_file = crate::song::SongFile::of(&song.source)?;
+                let clip = write::AudioClip {
+                    path: song_file.path(),
+                    start_s: dance.span.start_s,
+                    seconds: Some(dance.span.end_s - dance.span.start_s),
+                };
                 write::write_mp4(
                     &tmp,
                     frames(fps),
                     PREVIEW_WIDTH,
                     PREVIEW_HEIGHT,
                     fps,
-                    Some(audio.path()),
+                    Some(clip),
                 )
             };
             written.map_err(|e| about_dest(e, &tmp, dest))?;

@@ -1,7 +1,7 @@
 //! The song, analysed once per job: EDGE-35 features and beats at 30 fps over the whole song
 //! (every system slices what it dances to from them).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use dancegen_music::decode::AudioSource;
@@ -179,39 +179,44 @@ impl AnalysedSong {
     }
 }
 
-/// The song between `start` and `end` seconds as a temporary mono 16-bit WAV (the MP4's
-/// sound track).
-pub(crate) fn segment_wav(
-    source: &AudioSource,
-    start: f64,
-    end: f64,
-) -> Result<tempfile::NamedTempFile, GenerateError> {
-    let audio = dancegen_music::load::load_many(source, &[0], |_| {})?
-        .into_iter()
-        .next()
-        .ok_or_else(|| GenerateError::Generation("decoding the song for the preview".into()))?;
-    let sr = audio.sample_rate;
-    let a = ((start * f64::from(sr)) as usize).min(audio.samples.len());
-    let b = ((end * f64::from(sr)) as usize).min(audio.samples.len());
-    let io = |e: &dyn std::fmt::Display| GenerateError::Output {
-        path: PathBuf::from("<temporary WAV for the preview>"),
-        reason: e.to_string(),
-    };
-    let tmp = tempfile::Builder::new()
-        .suffix(".wav")
-        .tempfile()
-        .map_err(|e| io(&e))?;
-    let spec = hound::WavSpec {
-        channels: 1,
-        sample_rate: sr,
-        bits_per_sample: 16,
-        sample_format: hound::SampleFormat::Int,
-    };
-    let mut w = hound::WavWriter::create(tmp.path(), spec).map_err(|e| io(&e))?;
-    for &s in &audio.samples[a..b] {
-        w.write_sample((s.clamp(-1.0, 1.0) * 32767.0) as i16)
-            .map_err(|e| io(&e))?;
+/// The song as a file ffmpeg can read for the MP4's sound track: the song's own file, or its
+/// bytes (an upload, the demo song) in a temporary file with the same extension. ffmpeg decodes
+/// it itself so the video keeps the song's channels; it used to get a mono WAV of our
+/// analysis decode (librosa's down-mix), and a stereo song lost its stereo.
+pub(crate) enum SongFile {
+    Given(PathBuf),
+    Temporary(tempfile::NamedTempFile),
+}
+
+impl SongFile {
+    pub(crate) fn of(source: &AudioSource) -> Result<Self, GenerateError> {
+        match source {
+            AudioSource::File(p) => Ok(SongFile::Given(p.clone())),
+            AudioSource::Bytes { name, bytes } => {
+                let io = |e: &dyn std::fmt::Display| GenerateError::Output {
+                    path: PathBuf::from("<temporary copy of the song for the video>"),
+                    reason: e.to_string(),
+                };
+                let ext = name
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .map(|e| format!(".{e}"))
+                    .unwrap_or_default();
+                let mut tmp = tempfile::Builder::new()
+                    .prefix(".dancegen-song-")
+                    .suffix(&ext)
+                    .tempfile()
+                    .map_err(|e| io(&e))?;
+                std::io::Write::write_all(&mut tmp, bytes).map_err(|e| io(&e))?;
+                Ok(SongFile::Temporary(tmp))
+            }
+        }
     }
-    w.finalize().map_err(|e| io(&e))?;
-    Ok(tmp)
+
+    pub(crate) fn path(&self) -> &Path {
+        match self {
+            SongFile::Given(p) => p,
+            SongFile::Temporary(t) => t.path(),
+        }
+    }
 }

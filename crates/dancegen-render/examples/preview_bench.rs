@@ -124,7 +124,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         WIDTH,
         HEIGHT,
         FPS,
-        audio.as_deref(),
+        audio.as_deref().map(write::AudioClip::whole),
     )?;
     report("mp4", n, t0.elapsed().as_secs_f64(), hash.0);
     if let Some(e) = raw_err {

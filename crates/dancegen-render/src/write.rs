@@ -281,13 +281,34 @@ const X264_CRF: &str = "20";
 /// as AAC and cut to the shorter of the two. Written to a temporary `.mp4` in the output's
 /// directory and renamed into place on success. Frames are drawn ahead on another thread
 /// while earlier ones go to ffmpeg.
+/// The sound of a video: `seconds` of the audio file `path` from `start_s`, decoded by ffmpeg
+/// itself so that every channel of the song is kept (a stereo song stays stereo).
+#[derive(Clone, Copy, Debug)]
+pub struct AudioClip<'a> {
+    pub path: &'a Path,
+    pub start_s: f64,
+    /// `None`: to the end of the file (the video's length cuts it, `-shortest`).
+    pub seconds: Option<f64>,
+}
+
+impl<'a> AudioClip<'a> {
+    /// The whole file from its start.
+    pub fn whole(path: &'a Path) -> Self {
+        AudioClip {
+            path,
+            start_s: 0.0,
+            seconds: None,
+        }
+    }
+}
+
 pub fn write_mp4(
     path: &Path,
     frames: impl Iterator<Item = RgbImage> + Send,
     width: u32,
     height: u32,
     fps: f32,
-    audio: Option<&Path>,
+    audio: Option<AudioClip<'_>>,
 ) -> Result<usize, RenderError> {
     pipelined(frames, |frames| {
         write_mp4_from(path, frames, width, height, fps, audio)
@@ -300,7 +321,7 @@ fn write_mp4_from(
     width: u32,
     height: u32,
     fps: f32,
-    audio: Option<&Path>,
+    audio: Option<AudioClip<'_>>,
 ) -> Result<usize, RenderError> {
     if !width.is_multiple_of(2) || !height.is_multiple_of(2) {
         return Err(RenderError::Invalid(format!(
@@ -308,11 +329,11 @@ fn write_mp4_from(
         )));
     }
     if let Some(a) = audio
-        && !a.is_file()
+        && !a.path.is_file()
     {
         return Err(RenderError::Invalid(format!(
             "{}: no such audio file",
-            a.display()
+            a.path.display()
         )));
     }
     let dir = match path.parent() {
@@ -338,7 +359,12 @@ fn write_mp4_from(
         .args(["-framerate", &format!("{fps}")])
         .args(["-i", "pipe:0"]);
     if let Some(a) = audio {
-        cmd.arg("-i").arg(a);
+        // Input options: decode from `start_s`, for `seconds` (sample-accurate for audio).
+        cmd.args(["-ss", &format!("{:.6}", a.start_s.max(0.0))]);
+        if let Some(s) = a.seconds {
+            cmd.args(["-t", &format!("{s:.6}")]);
+        }
+        cmd.arg("-i").arg(a.path);
         cmd.args([
             "-map",
             "0:v:0",
