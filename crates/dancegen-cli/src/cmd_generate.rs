@@ -249,6 +249,7 @@ pub(crate) fn request(args: &GenerateArgs) -> Result<Request> {
                 dancers,
                 rig: args.rig,
                 character: character.clone(),
+                video: args.video_size,
             })
             .collect(),
     })

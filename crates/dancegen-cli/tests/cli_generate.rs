@@ -262,6 +262,47 @@ fn the_video_keeps_the_songs_stereo_for_the_danced_span() {
         (seconds - 4.0).abs() < 0.1,
         "the sound lasts {seconds} s: {text}"
     );
+    // 640 × 480 unless 1280 × 720 is asked for; another size is refused, naming the choices.
+    let size = |path: &std::path::Path| {
+        let o = std::process::Command::new("ffprobe")
+            .args(["-v", "error", "-select_streams", "v:0"])
+            .args(["-show_entries", "stream=width,height", "-of", "csv=p=0"])
+            .arg(path)
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&o.stdout).trim().to_string()
+    };
+    assert_eq!(size(&out), "640,480");
+    let hd = dir.path().join("hd.mp4");
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--start",
+        "10",
+        "--end",
+        "12",
+        "--video-size",
+        "1280x720",
+        "-o",
+        hd.to_str().unwrap(),
+    ]));
+    assert_eq!(size(&hd), "1280,720");
+    let o = dancegen(&[
+        "-q",
+        "generate",
+        &song(),
+        "--video-size",
+        "4k",
+        "-o",
+        "x.mp4",
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("choose 640x480 or 1280x720"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

@@ -367,7 +367,11 @@ pub(crate) fn write_all(
         }
         if p.format.is_preview() {
             let tracks = tracks_from_motion(dest, &motion)?;
-            let scene = Scene::new(&tracks, &RenderOptions::new(PREVIEW_WIDTH, PREVIEW_HEIGHT))?;
+            let (width, height) = match p.format {
+                OutputFormat::Mp4 => p.request.video.pixels(),
+                _ => (PREVIEW_WIDTH, PREVIEW_HEIGHT),
+            };
+            let scene = Scene::new(&tracks, &RenderOptions::new(width, height))?;
             let base = done;
             // Frames stop coming once the job is cancelled; the short file is then dropped
             // with the staging folder.
@@ -391,14 +395,7 @@ pub(crate) fn write_all(
                     start_s: dance.span.start_s,
                     seconds: Some(dance.span.end_s - dance.span.start_s),
                 };
-                write::write_mp4(
-                    &tmp,
-                    frames(fps),
-                    PREVIEW_WIDTH,
-                    PREVIEW_HEIGHT,
-                    fps,
-                    Some(clip),
-                )
+                write::write_mp4(&tmp, frames(fps), width, height, fps, Some(clip))
             };
             written.map_err(|e| about_dest(e, &tmp, dest))?;
         } else {

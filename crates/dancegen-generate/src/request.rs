@@ -64,6 +64,42 @@ pub struct OutputRequest {
     /// A `.glb` output becomes this character (the user's humanoid glTF/VRM) dancing the dance,
     /// retargeted onto its skeleton; other formats ignore it.
     pub character: Option<Arc<Character>>,
+    /// The picture size of an `.mp4` (other formats ignore it).
+    pub video: VideoSize,
+}
+
+/// The picture size of a video preview: 640 × 480, or 1280 × 720 for a sharper video that
+/// takes about three times as long to render.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VideoSize {
+    #[default]
+    Sd,
+    Hd,
+}
+
+impl VideoSize {
+    /// The choices, as users write them.
+    pub const NAMES: [&'static str; 2] = ["640x480", "1280x720"];
+
+    /// Width and height in pixels.
+    pub fn pixels(self) -> (u32, u32) {
+        match self {
+            VideoSize::Sd => (640, 480),
+            VideoSize::Hd => (1280, 720),
+        }
+    }
+
+    /// `640x480` or `1280x720`; anything else is an error listing them.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        match text.trim() {
+            "640x480" => Ok(VideoSize::Sd),
+            "1280x720" => Ok(VideoSize::Hd),
+            other => Err(format!(
+                "video size '{other}': choose {}",
+                Self::NAMES.join(" or ")
+            )),
+        }
+    }
 }
 
 impl OutputRequest {
@@ -73,6 +109,7 @@ impl OutputRequest {
             dancers: DancerSelection::Auto,
             rig: Rig::Smpl,
             character: None,
+            video: VideoSize::Sd,
         }
     }
 }

@@ -229,6 +229,7 @@ fn follower_only_and_many_dancer_rules() {
             dancers: DancerSelection::Generated,
             rig: Default::default(),
             character: None,
+            video: Default::default(),
         }],
     };
     let done = g.run(&req, &|_| {}, &CancelToken::new()).unwrap();

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
+use dancegen_generate::request::VideoSize;
 use dancegen_generate::systems::{self, group};
 
 use crate::edit_params::EditParams;
@@ -73,6 +74,10 @@ pub struct JobParams {
     pub variations: usize,
     /// Also render an `.mp4` preview with the song (takes as long as the dance itself).
     pub mp4: bool,
+    /// The `.mp4`'s picture size, `640x480` (the default) or `1280x720`
+    /// ([`dancegen_generate::request::VideoSize`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub video_size: Option<String>,
     /// A new version of a finished job's dance ([`EditParams`]); the song, system, dancers,
     /// start and end are that job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -87,7 +92,8 @@ pub struct JobParams {
 pub const MAX_STEPS: usize = 1000;
 
 /// The fields `params` may have, for the error about an unknown one.
-const FIELDS: &str = "system, dancers, seed, genre, steps, start, end, variations, mp4, edit";
+const FIELDS: &str =
+    "system, dancers, seed, genre, steps, start, end, variations, mp4, video_size, edit";
 
 /// The parameters an edit takes from the job it edits, not from its own params.
 const FROM_THE_EDITED_JOB: [&str; 5] = ["system", "dancers", "genre", "start", "end"];
@@ -228,6 +234,10 @@ impl JobParams {
                 format!("{variations}: need 1 to {max_variations}"),
             ));
         }
+        let video_size = opt_str(&obj, "video_size")?;
+        if let Some(v) = &video_size {
+            VideoSize::parse(v).map_err(|e| ApiError::field("video_size", e))?;
+        }
         let mp4 = match obj.get("mp4") {
             None | Some(Value::Null) => false,
             Some(Value::Bool(b)) => *b,
@@ -246,6 +256,7 @@ impl JobParams {
             end,
             variations,
             mp4,
+            video_size,
             edit,
             song_title: None,
         })
@@ -461,6 +472,11 @@ mod tests {
             Some("variations")
         );
         assert_eq!(err(r#"{"mp4":"yes"}"#).field.as_deref(), Some("mp4"));
+        let e = err(r#"{"mp4":true,"video_size":"4k"}"#);
+        assert_eq!(e.field.as_deref(), Some("video_size"));
+        assert!(e.to_string().contains("choose 640x480 or 1280x720"), "{e}");
+        let p = JobParams::parse(r#"{"mp4":true,"video_size":"1280x720"}"#, 4).unwrap();
+        assert_eq!(p.video_size.as_deref(), Some("1280x720"));
         assert_eq!(
             err(r#"{"system":"duet","genre":"salsa"}"#).field.as_deref(),
             Some("genre")

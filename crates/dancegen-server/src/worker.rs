@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use dancegen_generate::progress::stage::WRITE_OUTPUTS;
-use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest};
+use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest, VideoSize};
 use dancegen_generate::systems::duet::{DuetOptions, load_leader};
 use dancegen_generate::systems::group::GroupOptions;
 use dancegen_generate::{
@@ -176,7 +176,16 @@ fn generate(
             .map(|ext| OutputRequest::new(dir.join(format!("{stem}.{ext}"))))
             .collect();
         if p.mp4 {
-            outputs.push(OutputRequest::new(dir.join(format!("{stem}.mp4"))));
+            // Checked when the job was made; an unreadable value in an old row is 640x480.
+            let video = p
+                .video_size
+                .as_deref()
+                .and_then(|v| VideoSize::parse(v).ok())
+                .unwrap_or_default();
+            outputs.push(OutputRequest {
+                video,
+                ..OutputRequest::new(dir.join(format!("{stem}.mp4")))
+            });
         }
         if p.system == FACE_SYSTEM {
             outputs.extend(
@@ -191,6 +200,7 @@ fn generate(
                 dancers: DancerSelection::Given,
                 rig: Default::default(),
                 character: None,
+                video: Default::default(),
             });
         }
         let request = Request {

@@ -292,6 +292,7 @@ function wireForm() {
     window.addEventListener(type, (e) => { if (!zone.contains(e.target)) e.preventDefault(); });
   }
   $('system').addEventListener('change', systemChanged);
+  $('mp4').addEventListener('change', () => { $('video-size-field').hidden = !$('mp4').checked; });
   $('job-form').addEventListener('input', (e) => { if (e.target.getAttribute('aria-invalid')) markField(null); });
   $('job-form').addEventListener('submit', (e) => {
     e.preventDefault();
@@ -358,6 +359,7 @@ function readParams() {
   }
   params.variations = number('variations', { integer: true, min: 1, max: 4, label: 'Variations' }) ?? 1;
   params.mp4 = $('mp4').checked;
+  if (params.mp4) params.video_size = $('video-size').value;
   return { params, song, leader };
 }
 

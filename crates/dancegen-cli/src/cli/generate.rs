@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use dancegen_formats::rig::Rig;
+use dancegen_generate::request::VideoSize;
 
 use super::value_parsers::{parse_range, parse_rig, parse_source_fps};
 
@@ -60,6 +61,10 @@ pub struct GenerateArgs {
     /// every rig; .npy, .npz and .json keep SMPL's names and order.
     #[arg(long, default_value = "smpl", value_parser = parse_rig)]
     pub rig: Rig,
+    /// Picture size of an .mp4 output: 640x480, or 1280x720 (sharper, about three times the
+    /// rendering time).
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = VideoSize::parse)]
+    pub video_size: VideoSize,
     /// Your own humanoid character (.glb, .vrm or .gltf with a skinned mesh): the .glb outputs
     /// become it dancing, retargeted onto its bones (matched by name — Mixamo, UE, VRM, SMPL,
     /// Blender-style — and hierarchy), its rest pose and its height. One dancer (with a leader,
