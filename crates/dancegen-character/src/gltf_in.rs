@@ -14,7 +14,7 @@ use base64::Engine;
 use serde_json::Value;
 
 use super::error::CharacterError;
-use dancegen_formats::glb_container::{CHUNK_BIN, CHUNK_JSON};
+use dancegen_formats::glb_container::{GlbError, split_glb};
 
 /// A glTF document with its binary data resolved.
 #[derive(Debug, Clone)]
@@ -109,64 +109,6 @@ pub(crate) fn parse_gltf(
         buffers,
         images,
     })
-}
-
-enum GlbError {
-    Unsupported(String),
-    Invalid(String),
-}
-
-/// Splits a GLB into its JSON chunk and its first BIN chunk.
-fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GlbError> {
-    let u32_at = |o: usize| -> Option<u32> {
-        bytes
-            .get(o..o + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    };
-    let (Some(version), Some(length)) = (u32_at(4), u32_at(8)) else {
-        return Err(GlbError::Invalid(
-            "GLB header is shorter than 12 bytes".into(),
-        ));
-    };
-    if version != 2 {
-        return Err(GlbError::Unsupported(format!(
-            "binary glTF version {version}; only version 2 (glTF 2.0) is read"
-        )));
-    }
-    let length = length as usize;
-    if length > bytes.len() {
-        return Err(GlbError::Invalid(format!(
-            "truncated: the GLB header says {length} bytes, the file has {}",
-            bytes.len()
-        )));
-    }
-    let mut offset = 12;
-    let mut json = None;
-    let mut bin = None;
-    while offset + 8 <= length {
-        let chunk_len = u32_at(offset).unwrap_or(0) as usize;
-        let kind = u32_at(offset + 4).unwrap_or(0);
-        let start = offset + 8;
-        let Some(end) = start.checked_add(chunk_len).filter(|&e| e <= length) else {
-            return Err(GlbError::Invalid(format!(
-                "chunk at byte {offset} claims {chunk_len} bytes, past the end of the file"
-            )));
-        };
-        let data = &bytes[start..end];
-        match kind {
-            CHUNK_JSON if json.is_none() => json = Some(data),
-            CHUNK_BIN if bin.is_none() && json.is_some() => bin = Some(data),
-            _ => {} // unknown chunks are skipped, as the specification says
-        }
-        if json.is_none() {
-            return Err(GlbError::Invalid("the first GLB chunk is not JSON".into()));
-        }
-        offset = end;
-    }
-    match json {
-        Some(j) => Ok((j, bin)),
-        None => Err(GlbError::Invalid("the GLB has no JSON chunk".into())),
-    }
 }
 
 fn strip_bom(b: &[u8]) -> &[u8] {

@@ -246,3 +246,65 @@ fn rig_presets_rename_bones_and_unknown_rigs_are_listed() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("add --to smpl24"), "{e}");
 }
+
+/// What `generate` writes, `convert` and `render` read (issue 45): a group's `.glb` converts
+/// back to the joints of the group's `.npy` (every dancer, within float precision), one dancer
+/// of it with `--dancer`, and renders to a picture.
+#[test]
+fn our_own_glb_reads_back_as_the_dance() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let song = shared().join("data/music/sectoid/feelings.ogg");
+    ok(&dancegen(&[
+        "-q",
+        "generate",
+        song.to_str().unwrap(),
+        "--system",
+        "group",
+        "--dancers",
+        "3",
+        "--start",
+        "30",
+        "--end",
+        "34",
+        "-o",
+        &p("g.glb"),
+        "-o",
+        &p("g.npy"),
+    ]));
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &p("g.glb"),
+        "-o",
+        &p("back.npy"),
+    ]));
+    let read = |name: &str| dancegen_io::read_npy(std::path::Path::new(&p(name))).unwrap();
+    let (made, back) = (read("g.npy"), read("back.npy"));
+    assert_eq!(made.shape, back.shape);
+    assert_eq!(made.shape, vec![3, 120, 24, 3]);
+    let worst = made
+        .data
+        .iter()
+        .zip(&back.data)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-5,
+        "the .glb's joints are {worst} m from the .npy's"
+    );
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &p("g.glb"),
+        "--dancer",
+        "2",
+        "-o",
+        &p("d2.npy"),
+    ]));
+    let one = read("d2.npy");
+    assert_eq!(one.shape, vec![120, 24, 3]);
+    assert_eq!(one.data[..], back.data[2 * 120 * 72..]);
+    ok(&dancegen(&["-q", "render", &p("g.glb"), "-o", &p("g.png")]));
+    assert!(std::fs::metadata(p("g.png")).unwrap().len() > 1000);
+}

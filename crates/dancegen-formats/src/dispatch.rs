@@ -8,7 +8,7 @@
 //! | `.bvh` | any skeleton | SMPL 24 (centimetres) or the file's own skeleton |
 //! | `.npz` | AMASS-style SMPL (`poses`, `trans`, `mocap_framerate`), EDGE-style (`smpl_poses`, `smpl_trans`) | both |
 //! | `.npy` | FineDance `(T, 315)`, joints `(T, J, 3)` | world joints `(T, J, 3)` float32 |
-//! | `.glb` | – | animated skeleton + skinned capsule mesh; every dancer of a group |
+//! | `.glb` | the dances dancegen writes (any rig; every dancer of a group) | animated skeleton + skinned capsule mesh; every dancer of a group |
 //! | `.fbx` | – | the same scene as `.glb`, FBX 7.4 binary (Y-up, metres); every dancer of a group |
 //! | `.json` | – | joints, skeleton and (for SMPL) poses |
 
@@ -176,10 +176,18 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
                 })?
         }
         "npy" => load_npy(path)?,
+        "glb" => {
+            let mut dancers = crate::glb_in::read_dance_glb(path).map_err(|e| err(path, e))?;
+            if dancers.len() == 1 {
+                LoadedMotion::Smpl(dancers.remove(0))
+            } else {
+                LoadedMotion::Group(dancers)
+            }
+        }
         other => {
             return Err(err(
                 path,
-                format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz or .npy)"),
+                format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz, .npy or .glb)"),
             ));
         }
     };

@@ -41,3 +41,74 @@ pub fn assemble_glb(mut json: Vec<u8>, mut bin: Vec<u8>) -> Result<Vec<u8>, Stri
     }
     Ok(out)
 }
+
+/// Why bytes are not a GLB this reads.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GlbError {
+    /// A GLB of another container version.
+    Unsupported(String),
+    /// Not a well-formed GLB.
+    Invalid(String),
+}
+
+impl std::fmt::Display for GlbError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GlbError::Unsupported(s) | GlbError::Invalid(s) => f.write_str(s),
+        }
+    }
+}
+
+/// Splits a GLB into its JSON chunk and its first BIN chunk; every length is checked against
+/// the bytes present before it is used.
+pub fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GlbError> {
+    let u32_at = |o: usize| -> Option<u32> {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (u32_at(4), u32_at(8)) else {
+        return Err(GlbError::Invalid(
+            "GLB header is shorter than 12 bytes".into(),
+        ));
+    };
+    if version != 2 {
+        return Err(GlbError::Unsupported(format!(
+            "binary glTF version {version}; only version 2 (glTF 2.0) is read"
+        )));
+    }
+    let length = length as usize;
+    if length > bytes.len() {
+        return Err(GlbError::Invalid(format!(
+            "truncated: the GLB header says {length} bytes, the file has {}",
+            bytes.len()
+        )));
+    }
+    let mut offset = 12;
+    let mut json = None;
+    let mut bin = None;
+    while offset + 8 <= length {
+        let chunk_len = u32_at(offset).unwrap_or(0) as usize;
+        let kind = u32_at(offset + 4).unwrap_or(0);
+        let start = offset + 8;
+        let Some(end) = start.checked_add(chunk_len).filter(|&e| e <= length) else {
+            return Err(GlbError::Invalid(format!(
+                "chunk at byte {offset} claims {chunk_len} bytes, past the end of the file"
+            )));
+        };
+        let data = &bytes[start..end];
+        match kind {
+            CHUNK_JSON if json.is_none() => json = Some(data),
+            CHUNK_BIN if bin.is_none() && json.is_some() => bin = Some(data),
+            _ => {} // unknown chunks are skipped, as the specification says
+        }
+        if json.is_none() {
+            return Err(GlbError::Invalid("the first GLB chunk is not JSON".into()));
+        }
+        offset = end;
+    }
+    match json {
+        Some(j) => Ok((j, bin)),
+        None => Err(GlbError::Invalid("the GLB has no JSON chunk".into())),
+    }
+}

@@ -14,6 +14,7 @@ pub(crate) mod capsule_mesh;
 pub mod dispatch;
 pub mod fbx;
 pub mod glb_container;
+pub mod glb_in;
 pub mod gltf;
 pub mod livelink_csv;
 pub mod pickle;
