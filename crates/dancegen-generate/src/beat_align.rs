@@ -289,13 +289,7 @@ pub(crate) mod tests {
         let frames = m.frames();
         let beats: Vec<usize> = (1..20).map(|k| k * 15).collect();
         let bas = |m: &SmplMotion| {
-            let j: Vec<f64> = m
-                .joints_world()
-                .unwrap()
-                .into_iter()
-                .map(f64::from)
-                .collect();
-            let motion = try_motion_beats(&j, Variant::Bailando).unwrap();
+            let motion = try_motion_beats(&joints_f64(m).unwrap(), Variant::Bailando).unwrap();
             let music = clip_music_beats(&beats, m.frames(), Variant::Bailando);
             beat_align_score(&music, &motion, Variant::Bailando).unwrap()
         };
@@ -334,13 +328,7 @@ pub(crate) mod tests {
             );
         }
         let bas_of_run = |m: &SmplMotion| {
-            let j: Vec<f64> = m
-                .joints_world()
-                .unwrap()
-                .into_iter()
-                .map(f64::from)
-                .collect();
-            let motion: Vec<usize> = try_motion_beats(&j, Variant::Bailando)
+            let motion: Vec<usize> = try_motion_beats(&joints_f64(m).unwrap(), Variant::Bailando)
                 .unwrap()
                 .into_iter()
                 .filter(|b| (95..235).contains(b))

@@ -489,6 +489,13 @@ mod tests {
         (skel, local, root)
     }
 
+    /// The tests' steps: 6-frame swings lifted 6 cm, Y up.
+    const STEP: Stepping = Stepping {
+        swing_frames: 6,
+        lift: 0.06,
+        up: [0.0, 1.0, 0.0],
+    };
+
     /// Contacts of the left leg only: `ankle` and `toe` per frame; the right leg free.
     fn left_leg(ankle: Vec<bool>, toe: Vec<bool>) -> Vec<LegContacts> {
         let t = ankle.len();
@@ -636,11 +643,6 @@ mod tests {
         let (skel, mut local, root) = gliding(t);
         let before = positions(&skel, &local, &root);
         let contacts = left_planted(vec![true; t]);
-        let step = Stepping {
-            swing_frames: 6,
-            lift: 0.06,
-            up: [0.0, 1.0, 0.0],
-        };
         let bound = 0.05;
         pin_planted_feet_stepping(
             &skel,
@@ -650,7 +652,7 @@ mod tests {
             &contacts,
             4,
             bound,
-            Some(step),
+            Some(STEP),
         );
         let after = positions(&skel, &local, &root);
         let ankle = |f: usize| after[f].pos[7];
@@ -702,11 +704,6 @@ mod tests {
         let mut ankle = vec![true; t];
         ankle[..5].fill(false);
         let contacts = left_leg(ankle, vec![true; t]);
-        let step = Stepping {
-            swing_frames: 6,
-            lift: 0.06,
-            up: [0.0, 1.0, 0.0],
-        };
         pin_planted_feet_stepping(
             &skel,
             &mut local,
@@ -715,7 +712,7 @@ mod tests {
             &contacts,
             4,
             0.05,
-            Some(step),
+            Some(STEP),
         );
         let after = positions(&skel, &local, &root);
         let foot = |f: usize| sub(after[f].pos[10], after[f].pos[7]);
