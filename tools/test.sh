@@ -13,6 +13,8 @@
 #   - blender + python3-numpy: the real-client test imports the .bvh, .glb and .fbx that
 #     `generate` writes into Blender headless (Debian's Blender 3.4; it is GPL and only ever
 #     run as a separate program, never linked or vendored);
+#   - assimp-utils: the `.fbx` is imported by Assimp's command-line tool (a real client, like
+#     Blender; run as a separate program);
 #   - ../shared next to the checkout: golden fixtures and real songs and motion.
 # Missing Debian packages are installed with apt-get (as root, or through sudo); without
 # either the script names them and stops.
@@ -25,6 +27,7 @@ command -v ffmpeg >/dev/null || need+=(ffmpeg)
 [ -x /usr/bin/chromium ] || need+=(chromium)
 { command -v node >/dev/null && command -v npm >/dev/null; } || need+=(nodejs npm)
 command -v blender >/dev/null || need+=(blender)
+command -v assimp >/dev/null || need+=(assimp-utils)
 # Blender's glTF importer needs numpy in the Python Blender runs (Debian's python3).
 /usr/bin/python3 -c 'import numpy' 2>/dev/null || need+=(python3-numpy)
 if [ ${#need[@]} -gt 0 ]; then

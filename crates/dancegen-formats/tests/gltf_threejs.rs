@@ -2,25 +2,22 @@
 //! page served on 127.0.0.1, poses it at mid-clip, renders one frame and takes a screenshot, and
 //! the figure's pixels must be there.
 //!
-//! Needs Chromium (`/usr/bin/chromium`, Debian package `chromium`; `.ci/run` installs it) and
-//! npm (three.js is installed into `$CARGO_TARGET_TMPDIR/threejs` on first use). Without them
-//! the test fails and says what is missing.
+//! Needs Chromium and npm ([`threejs_page`]); without them the test fails and says what is
+//! missing.
 
-use std::io::{BufRead, BufReader, Write};
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod threejs_page;
+
+use std::path::Path;
 
 use dancegen_formats::aistpp::load_motion;
 use dancegen_formats::gltf::{GlbOptions, write_glb};
 use dancegen_motion::skeleton::Skeleton;
+use threejs_page::{IMPORT_MAP, headless_chromium, page_json, serve};
 
-/// three.js release the page is written against.
-const THREE_PACKAGE: &str = "three@0.181.0";
 const SIZE: u32 = 400;
 
 const PAGE: &str = r#"<!doctype html><html><head><style>body{margin:0;background:#fff}</style>
-<script type="importmap">{"imports":{"three":"/three/build/three.module.js","three/addons/":"/three/examples/jsm/"}}</script></head>
+IMPORT_MAP</head>
 <body><script type="module">
 import * as THREE from 'three';
 import {GLTFLoader} from 'three/addons/loaders/GLTFLoader.js';
@@ -46,96 +43,6 @@ new GLTFLoader().load('/model.glb', (g) => {
 }, undefined, (e) => { document.title = 'error ' + e; });
 </script></body></html>"#;
 
-fn ensure_three() -> PathBuf {
-    // The tests of this file run in parallel threads: two `npm install`s into one prefix on a
-    // fresh target directory make one of them fail (seen on a cold run), so one installs at a
-    // time and the others find the package.
-    static INSTALL: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let _one_at_a_time = INSTALL.lock().unwrap_or_else(|e| e.into_inner());
-    let prefix = Path::new(env!("CARGO_TARGET_TMPDIR")).join("threejs");
-    let module = prefix.join("node_modules/three/build/three.module.js");
-    if !module.exists() {
-        let out = Command::new("npm")
-            .args(["install", "--silent", "--no-audit", "--no-fund", "--prefix"])
-            .arg(&prefix)
-            .arg(THREE_PACKAGE)
-            .output()
-            .unwrap_or_else(|e| panic!("this test needs npm (Node.js) on the PATH: {e}"));
-        assert!(
-            out.status.success() && module.exists(),
-            "`npm install {THREE_PACKAGE}` failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    prefix.join("node_modules/three")
-}
-
-/// Serves `page`, `glb` and the three.js package on 127.0.0.1 until the test ends.
-fn serve(page: &'static str, glb: Vec<u8>, three: PathBuf) -> u16 {
-    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = listener.local_addr().unwrap().port();
-    std::thread::spawn(move || {
-        for stream in listener.incoming().flatten() {
-            let mut reader = BufReader::new(stream.try_clone().unwrap());
-            let mut request = String::new();
-            if reader.read_line(&mut request).is_err() {
-                continue;
-            }
-            // Drain the headers.
-            let mut line = String::new();
-            while reader.read_line(&mut line).is_ok_and(|n| n > 2) {
-                line.clear();
-            }
-            let path = request.split_whitespace().nth(1).unwrap_or("/").to_string();
-            let (status, ctype, body) = match path.as_str() {
-                "/" | "/index.html" => ("200 OK", "text/html", page.as_bytes().to_vec()),
-                "/model.glb" => ("200 OK", "model/gltf-binary", glb.clone()),
-                p if p.starts_with("/three/") && !p.contains("..") => {
-                    match std::fs::read(three.join(&p["/three/".len()..])) {
-                        Ok(b) => ("200 OK", "text/javascript", b),
-                        Err(_) => ("404 Not Found", "text/plain", b"missing".to_vec()),
-                    }
-                }
-                _ => ("404 Not Found", "text/plain", b"missing".to_vec()),
-            };
-            let mut s = stream;
-            let _ = write!(
-                s,
-                "HTTP/1.1 {status}\r\nContent-Type: {ctype}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
-                body.len()
-            );
-            let _ = s.write_all(&body);
-        }
-    });
-    port
-}
-
-/// The Chromium binary (Debian's package).
-fn chromium() -> &'static str {
-    ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect("this test needs Chromium (Debian: apt-get install chromium; .ci/run does)")
-}
-
-/// Headless Chromium with a throw-away profile in `dir`, no network beyond the page, and 15 s
-/// of virtual time for the page's scripts.
-fn headless_chromium(dir: &Path) -> Command {
-    let mut c = Command::new(chromium());
-    c.args([
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--no-first-run",
-        "--disable-quic",
-        "--virtual-time-budget=15000",
-    ])
-    .arg(format!("--user-data-dir={}", dir.join("profile").display()));
-    c
-}
-
 #[test]
 fn glb_renders_in_threejs_headless_chromium() {
     let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
@@ -152,7 +59,8 @@ fn glb_renders_in_threejs_headless_chromium() {
         &GlbOptions::default(),
     )
     .unwrap();
-    let port = serve(PAGE, std::fs::read(&glb_path).unwrap(), ensure_three());
+    let page = PAGE.replace("IMPORT_MAP", IMPORT_MAP);
+    let port = serve(page, "/model.glb", std::fs::read(&glb_path).unwrap());
     let shot = dir.path().join("shot.png");
     let out = headless_chromium(dir.path())
         .args(["--use-angle=swiftshader", "--enable-unsafe-swiftshader"])
@@ -196,7 +104,7 @@ fn glb_renders_in_threejs_headless_chromium() {
 }
 
 const FACE_PAGE: &str = r#"<!doctype html><html><head>
-<script type="importmap">{"imports":{"three":"/three/build/three.module.js","three/addons/":"/three/examples/jsm/"}}</script></head>
+IMPORT_MAP</head>
 <body><pre id="out">pending</pre><script type="module">
 import * as THREE from 'three';
 import {GLTFLoader} from 'three/addons/loaders/GLTFLoader.js';
@@ -241,26 +149,11 @@ fn face_morph_targets_play_in_threejs_headless_chromium() {
         &GlbOptions::default(),
     )
     .unwrap();
-    let port = serve(FACE_PAGE, glb, ensure_three());
-    let dir = tempfile::tempdir().unwrap();
-    let out = headless_chromium(dir.path())
-        .args(["--disable-gpu", "--dump-dom"])
-        .arg(format!("http://127.0.0.1:{port}/index.html"))
-        .output()
-        .unwrap();
-    let dom = String::from_utf8_lossy(&out.stdout);
-    let json = dom
-        .split("<pre id=\"out\">")
-        .nth(1)
-        .and_then(|s| s.split("</pre>").next())
-        .unwrap_or_else(|| {
-            panic!(
-                "no result in the page:\n{dom}\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            )
-        });
-    let r: serde_json::Value = serde_json::from_str(&json.replace("&quot;", "\""))
-        .unwrap_or_else(|e| panic!("{e}: {json}"));
+    let r = page_json(serve(
+        FACE_PAGE.replace("IMPORT_MAP", IMPORT_MAP),
+        "/model.glb",
+        glb,
+    ));
     let names: Vec<&str> = r["names"]
         .as_array()
         .unwrap()

@@ -214,6 +214,9 @@ pub(super) fn build(
             ],
         )],
     ));
+    // The layer's properties are the FBX SDK's defaults, written anyway: assimp reads an
+    // AnimationLayer only with a `{ … }` scope, and without one dropped the whole animation
+    // ("Animations: 0").
     c.objects.push(Node::with(
         "AnimationLayer",
         vec![
@@ -221,7 +224,7 @@ pub(super) fn build(
             object_name("BaseLayer", "AnimLayer"),
             s(""),
         ],
-        Vec::new(),
+        vec![Node::group("Properties70", vec![p_number("Weight", 100.0)])],
     ));
     c.connections.push(oo(layer_id, stack_id));
 
