@@ -247,11 +247,11 @@ fn rig_presets_rename_bones_and_unknown_rigs_are_listed() {
     assert!(!o.status.success() && e.contains("add --to smpl24"), "{e}");
 }
 
-/// What `generate` writes, `convert` and `render` read (issue 45): a group's `.glb` converts
-/// back to the joints of the group's `.npy` (every dancer, within float precision), one dancer
-/// of it with `--dancer`, and renders to a picture.
+/// What `generate` writes, `convert` and `render` read (issue 45): a group's `.glb` and `.fbx`
+/// convert back to the joints of the group's `.npy` (every dancer, within float precision), one
+/// dancer of the `.glb` with `--dancer`, and both render to a picture.
 #[test]
-fn our_own_glb_reads_back_as_the_dance() {
+fn our_own_glb_and_fbx_read_back_as_the_dance() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
     let song = shared().join("data/music/sectoid/feelings.ogg");
@@ -269,6 +269,8 @@ fn our_own_glb_reads_back_as_the_dance() {
         "34",
         "-o",
         &p("g.glb"),
+        "-o",
+        &p("g.fbx"),
         "-o",
         &p("g.npy"),
     ]));
@@ -307,4 +309,26 @@ fn our_own_glb_reads_back_as_the_dance() {
     assert_eq!(one.data[..], back.data[2 * 120 * 72..]);
     ok(&dancegen(&["-q", "render", &p("g.glb"), "-o", &p("g.png")]));
     assert!(std::fs::metadata(p("g.png")).unwrap().len() > 1000);
+    // The .fbx: Euler degrees in f32 keys, so within 0.1 mm rather than the .glb's 1e-5 m.
+    ok(&dancegen(&[
+        "-q",
+        "convert",
+        &p("g.fbx"),
+        "-o",
+        &p("fbx.npy"),
+    ]));
+    let from_fbx = read("fbx.npy");
+    assert_eq!(made.shape, from_fbx.shape);
+    let worst = made
+        .data
+        .iter()
+        .zip(&from_fbx.data)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-4,
+        "the .fbx's joints are {worst} m from the .npy's"
+    );
+    ok(&dancegen(&["-q", "render", &p("g.fbx"), "-o", &p("f.png")]));
+    assert!(std::fs::metadata(p("f.png")).unwrap().len() > 1000);
 }

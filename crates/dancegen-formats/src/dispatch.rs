@@ -147,7 +147,8 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
         return Err(err(path, "no such file"));
     }
     let fps = opts.source_fps;
-    let mut loaded = match extension(path).as_str() {
+    let ext = extension(path);
+    let mut loaded = match ext.as_str() {
         "pkl" => load_pickle(path)?,
         "bvh" => {
             let read = BvhReadOptions {
@@ -176,8 +177,13 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
                 })?
         }
         "npy" => load_npy(path)?,
-        "glb" => {
-            let mut dancers = crate::glb_in::read_dance_glb(path).map_err(|e| err(path, e))?;
+        "glb" | "fbx" => {
+            let read = if ext == "glb" {
+                crate::glb_in::read_dance_glb(path)
+            } else {
+                crate::fbx_in::read_dance_fbx(path)
+            };
+            let mut dancers = read.map_err(|e| err(path, e))?;
             if dancers.len() == 1 {
                 LoadedMotion::Smpl(dancers.remove(0))
             } else {
@@ -187,7 +193,9 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
         other => {
             return Err(err(
                 path,
-                format!("unknown motion format '.{other}' (use .pkl, .bvh, .npz, .npy or .glb)"),
+                format!(
+                    "unknown motion format '.{other}' (use .pkl, .bvh, .npz, .npy, .glb or .fbx)"
+                ),
             ));
         }
     };

@@ -13,6 +13,7 @@ pub mod bvh_motion;
 pub(crate) mod capsule_mesh;
 pub mod dispatch;
 pub mod fbx;
+pub mod fbx_in;
 pub mod glb_container;
 pub mod glb_in;
 pub mod gltf;

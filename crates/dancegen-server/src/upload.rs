@@ -359,4 +359,4 @@ pub fn check_leader(path: &Path) -> Result<(), ApiError> {
 }
 
 /// Motion formats a duet's leader may come in (the formats `dancegen convert` reads).
-const LEADER_FORMATS: [&str; 4] = ["bvh", "npz", "npy", "pkl"];
+const LEADER_FORMATS: [&str; 6] = ["bvh", "npz", "npy", "pkl", "glb", "fbx"];

@@ -23,8 +23,8 @@ pub enum TargetSkeleton {
 
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
-    /// Input motion: AIST++ / AIOZ-GDance .pkl, .bvh, SMPL or EDGE .npz, FineDance .npy (T, 315)
-    /// or joints .npy (T, J, 3).
+    /// Input motion: AIST++ / AIOZ-GDance .pkl, .bvh, SMPL or EDGE .npz, FineDance .npy (T, 315),
+    /// joints .npy (T, J, 3) or a group's (N, T, J, 3), or a .glb / .fbx dancegen wrote.
     pub input: PathBuf,
     /// Output; the format follows the extension: .npy (world joints (T, J, 3), float32, Y-up),
     /// .bvh, .glb, .fbx, .npz, .json.
