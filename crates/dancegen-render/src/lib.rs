@@ -69,8 +69,10 @@ impl RgbImage {
 
 /// The dancers of a loaded motion file as render tracks (a group file gives several).
 ///
-/// SMPL motions get the SMPL 24 parents, BVH its own hierarchy (in file units), raw joint
-/// arrays no parents (spheres only).
+/// SMPL motions get the SMPL 24 parents, BVH its own hierarchy (in file units). Raw joint
+/// arrays get the bones of the skeleton dancegen writes with that many joints (SMPL 24, the
+/// holistic SMPL-H 52) when every such bone keeps its length through the clip, as a rigid
+/// skeleton's do ([`bones_of_joint_array`]); otherwise no parents (spheres only).
 pub fn tracks_from_motion(path: &Path, m: &LoadedMotion) -> Result<Vec<DancerTrack>, RenderError> {
     let fps = m.fps();
     let (shape, data) = joint_positions(path, m)?;
@@ -101,12 +103,52 @@ pub fn tracks_from_motion(path: &Path, m: &LoadedMotion) -> Result<Vec<DancerTra
             .chunks((data.len() / dancers.max(&1)).max(1))
             .map(|c| DancerTrack {
                 joints: c.to_vec(),
-                parents: vec![None; *joints],
+                parents: bones_of_joint_array(c, *joints).unwrap_or_else(|| vec![None; *joints]),
                 fps,
             })
             .collect(),
     };
     Ok(tracks)
+}
+
+/// Largest spread (max − min over the clip) of a bone's length, relative to its mean, for a
+/// joint array to be drawn with that skeleton's bones. Joint positions computed from one
+/// skeleton keep every bone's length to float precision; another skeleton's joints with the
+/// same count give bones that stretch by tens of per cent.
+const RIGID_BONE_SPREAD: f64 = 0.02;
+
+/// The parents of the skeleton dancegen writes with `joints` joints (SMPL 24, SMPL-H 52), if
+/// every one of its bones keeps its length over the frames of `positions` (`[T, joints, 3]`,
+/// flat) within [`RIGID_BONE_SPREAD`].
+pub fn bones_of_joint_array(positions: &[f32], joints: usize) -> Option<Vec<Option<usize>>> {
+    let skeleton = match joints {
+        24 => Skeleton::smpl24(),
+        52 => Skeleton::smplh52_approx(),
+        _ => return None,
+    };
+    let frames = positions.len() / (joints * 3);
+    if frames == 0 {
+        return None;
+    }
+    let at = |f: usize, j: usize| {
+        let i = (f * joints + j) * 3;
+        [0, 1, 2].map(|k| f64::from(positions[i + k]))
+    };
+    let rigid = skeleton.parents().iter().enumerate().all(|(j, p)| {
+        let Some(p) = *p else { return true };
+        let lengths: Vec<f64> = (0..frames)
+            .map(|f| {
+                let (a, b) = (at(f, j), at(f, p));
+                (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+            })
+            .collect();
+        let mean = lengths.iter().sum::<f64>() / frames as f64;
+        let (lo, hi) = lengths
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
+        mean > 0.0 && (hi - lo) <= RIGID_BONE_SPREAD * mean
+    });
+    rigid.then(|| skeleton.parents().to_vec())
 }
 
 /// Renders the whole clip at `out_fps` into memory (convenient for short clips and tests; use
@@ -213,6 +255,36 @@ mod tests {
         for (d, tr) in tracks.iter().enumerate() {
             assert_eq!(tr.joints, positions[d * per..(d + 1) * per]);
         }
+    }
+
+    #[test]
+    fn a_joint_array_of_a_rigid_smpl_skeleton_is_drawn_with_its_bones() {
+        use dancegen_motion::fk::{LocalRotations, forward_kinematics};
+        let sk = Skeleton::smpl24();
+        let t = 20;
+        let rot: Vec<f64> = (0..t * 72).map(|i| 0.8 * (i as f64 * 0.37).sin()).collect();
+        let trans: Vec<f64> = (0..t * 3).map(|i| (i as f64 * 0.1).cos()).collect();
+        let joints: Vec<f32> =
+            forward_kinematics(&sk, LocalRotations::AxisAngle(&rot), &trans, false)
+                .unwrap()
+                .positions
+                .iter()
+                .map(|&v| v as f32)
+                .collect();
+        assert_eq!(
+            bones_of_joint_array(&joints, 24).as_deref(),
+            Some(sk.parents())
+        );
+        // Another skeleton's 24 joints (two of them swapped): its "bones" stretch.
+        let mut other = joints.clone();
+        for f in 0..t {
+            for k in 0..3 {
+                other.swap((f * 24 + 4) * 3 + k, (f * 24 + 20) * 3 + k);
+            }
+        }
+        assert_eq!(bones_of_joint_array(&other, 24), None);
+        // No skeleton of that size.
+        assert_eq!(bones_of_joint_array(&joints[..t * 23 * 3], 23), None);
     }
 
     #[test]
