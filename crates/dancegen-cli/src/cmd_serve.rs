@@ -48,6 +48,9 @@ pub fn run(args: &ServeArgs, quiet: bool) -> Result<()> {
             ..Limits::default()
         },
         models,
+        keep: args
+            .keep_days
+            .map(|d| std::time::Duration::from_secs(u64::from(d) * 86_400)),
     };
     dancegen_server::run(config, |addr| {
         if !quiet {

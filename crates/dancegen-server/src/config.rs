@@ -60,6 +60,10 @@ pub struct ServeConfig {
     pub limits: Limits,
     /// A model folder per system name, overriding the search path (tests, custom models).
     pub models: Vec<(String, PathBuf)>,
+    /// How long a finished job (done, failed, cancelled) is kept after it ended: older ones
+    /// are removed with their files when the server starts and once a day while it runs
+    /// (`--keep-days`). `None` keeps every job until it is deleted.
+    pub keep: Option<Duration>,
 }
 
 impl ServeConfig {
@@ -70,6 +74,7 @@ impl ServeConfig {
             workers: 1,
             limits: Limits::default(),
             models: Vec::new(),
+            keep: None,
         }
     }
 }

@@ -289,6 +289,20 @@ impl Jobs {
         lock(&self.cancels).remove(id);
     }
 
+    /// Removes, with their files, the finished jobs that ended more than `keep` ago
+    /// (`serve --keep-days`); queued and running jobs stay whatever their age. Returns how
+    /// many went.
+    pub fn expire(&self, keep: Duration) -> Result<usize, ApiError> {
+        let cutoff = crate::store::now() - keep.as_secs_f64();
+        let mut removed = 0;
+        for id in self.store.finished_before(cutoff)? {
+            if let Some(None) = self.cancel_or_remove(&id)? {
+                removed += 1;
+            }
+        }
+        Ok(removed)
+    }
+
     /// `DELETE /api/jobs/{id}`: a queued job is cancelled at once, a running one is asked to
     /// stop (it becomes `cancelled` at its next step), a finished one is removed with its
     /// files. `Ok(None)`: no such job; `Ok(Some(None))`: removed.

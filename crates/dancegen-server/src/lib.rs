@@ -47,6 +47,9 @@ use crate::worker::Workers;
 /// Opens the data dir and starts the workers: everything but the HTTP listener.
 fn start_app(config: &ServeConfig) -> Result<(AppState, Workers), String> {
     let jobs = Arc::new(Jobs::open(&config.data_dir)?);
+    if let Some(keep) = config.keep {
+        expire(&jobs, keep);
+    }
     let locator = ModelLocator::from_environment();
     let catalog = Arc::new(Catalog::discover(&locator, &config.models));
     for s in &catalog.systems {
@@ -76,6 +79,35 @@ fn start_app(config: &ServeConfig) -> Result<(AppState, Workers), String> {
     Ok((state, workers))
 }
 
+/// How often finished jobs are checked against `--keep-days` while the server runs.
+const EXPIRY_INTERVAL: std::time::Duration = std::time::Duration::from_secs(24 * 3600);
+
+/// Removes the finished jobs older than `keep` ([`Jobs::expire`]) and says how many went.
+fn expire(jobs: &Jobs, keep: std::time::Duration) {
+    match jobs.expire(keep) {
+        Ok(0) => {}
+        Ok(n) => tracing::info!(
+            "removed {n} finished job(s) older than {:.0} days",
+            keep.as_secs_f64() / 86400.0
+        ),
+        Err(e) => tracing::warn!("removing old jobs: {e}"),
+    }
+}
+
+/// Checks for expired jobs every [`EXPIRY_INTERVAL`] (the start has checked already), on a
+/// blocking thread: removing a job's files is file-system work. Ends with the runtime.
+fn spawn_daily_expiry(jobs: &Arc<Jobs>, keep: Option<std::time::Duration>) {
+    let Some(keep) = keep else { return };
+    let jobs = jobs.clone();
+    tokio::spawn(async move {
+        loop {
+            tokio::time::sleep(EXPIRY_INTERVAL).await;
+            let j = jobs.clone();
+            let _ = tokio::task::spawn_blocking(move || expire(&j, keep)).await;
+        }
+    });
+}
+
 async fn bind(addr: SocketAddr) -> Result<tokio::net::TcpListener, String> {
     tokio::net::TcpListener::bind(addr)
         .await
@@ -98,6 +130,7 @@ pub fn run(config: ServeConfig, on_ready: impl FnOnce(SocketAddr)) -> Result<(),
         let listener = bind(config.addr).await?;
         let addr = listener.local_addr().map_err(|e| e.to_string())?;
         on_ready(addr);
+        spawn_daily_expiry(&state.jobs, config.keep);
         serve_until(listener, api::router(state), shutdown_signal()).await
     })?;
     workers.stop(&jobs);
@@ -216,6 +249,7 @@ pub fn spawn(config: ServeConfig) -> Result<RunningServer, String> {
                     }
                 };
                 let _ = ready_tx.send(listener.local_addr().map_err(|e| e.to_string()));
+                spawn_daily_expiry(&state.jobs, config.keep);
                 let stop = async {
                     let _ = stop_rx.await;
                 };

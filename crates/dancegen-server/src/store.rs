@@ -273,6 +273,17 @@ impl Store {
             == 1)
     }
 
+    /// Finished jobs (done, failed, cancelled) that ended before `cutoff` (seconds since the
+    /// epoch; a job without an end time counts from its creation), oldest first.
+    pub fn finished_before(&self, cutoff: f64) -> rusqlite::Result<Vec<String>> {
+        let conn = self.conn();
+        let mut st = conn.prepare(
+            "SELECT id FROM jobs WHERE state IN ('done', 'failed', 'cancelled')
+                 AND COALESCE(finished, created) < ?1 ORDER BY seq",
+        )?;
+        st.query_map([cutoff], |r| r.get(0))?.collect()
+    }
+
     /// Queued jobs before `id` (its place in the queue, 0 = next).
     pub fn queue_position(&self, id: &str) -> rusqlite::Result<Option<usize>> {
         self.conn()
@@ -321,6 +332,32 @@ mod tests {
         assert_eq!((a.state, a.progress), (JobState::Done, 1.0));
         assert!(s.delete("a").unwrap());
         assert!(s.get("a").unwrap().is_none());
+    }
+
+    /// Only finished jobs count for expiry, by their end (or, without one, their creation).
+    #[test]
+    fn finished_before_lists_only_finished_jobs_that_ended_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let (s, _) = Store::open(&dir.path().join("jobs.sqlite3")).unwrap();
+        for id in ["q", "r", "d", "f"] {
+            s.insert(id, &params(), "song.ogg", None).unwrap();
+        }
+        for (id, state) in [("q", None), ("r", None), ("d", Some(JobState::Done))] {
+            let claimed = s.claim().unwrap().unwrap();
+            assert_eq!(claimed.id, id);
+            if let Some(state) = state {
+                s.finish(id, state, None, &[]).unwrap();
+            }
+        }
+        s.cancel_queued("f").unwrap();
+        // "q" and "r" are running, "d" done and "f" cancelled, all just now.
+        let later = now() + 10.0;
+        assert_eq!(s.finished_before(later).unwrap(), ["d", "f"]);
+        assert!(s.finished_before(now() - 10.0).unwrap().is_empty());
+        s.conn()
+            .execute("UPDATE jobs SET finished = NULL WHERE id = 'd'", [])
+            .unwrap();
+        assert_eq!(s.finished_before(later).unwrap(), ["d", "f"], "by creation");
     }
 
     /// A database an older server made (no `warnings` column) opens, its jobs read with no

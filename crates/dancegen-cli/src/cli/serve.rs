@@ -26,6 +26,11 @@ pub struct ServeArgs {
     /// Jobs waiting or running before new ones are refused (HTTP 429).
     #[arg(long, default_value_t = 100, value_name = "N")]
     pub max_queue: usize,
+    /// Remove finished jobs (done, failed, cancelled) and their files N days after they ended,
+    /// when the server starts and once a day while it runs. Default: keep every job until it is
+    /// deleted.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=36500))]
+    pub keep_days: Option<u32>,
     /// A model folder to serve instead of the installed default (`--model DIR`, repeatable;
     /// its system comes from its model.toml).
     #[arg(long = "model", value_name = "DIR")]

@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 use crate::common::{TestServer, demo_song, start};
-use dancegen_server::Limits;
 use dancegen_server::client::{Part, Reply};
+use dancegen_server::{Limits, ServeConfig};
 use serde_json::Value;
 
 const JOB_TIMEOUT: Duration = Duration::from_secs(600);
@@ -802,4 +802,68 @@ fn a_holistic_edit_keeps_the_arms_it_is_asked_to_keep() {
         legs > 0.02,
         "the legs of the range are the old ones (they moved {legs} rad at most)"
     );
+}
+
+/// `serve --keep-days`: a finished job (done, failed or cancelled) that ended longer ago than
+/// the keep time is gone when the server starts, with its files; a recent one stays, and
+/// without a keep time nothing is removed (queued jobs never expire: the store's unit test).
+#[test]
+fn finished_jobs_older_than_the_keep_time_are_removed_at_start() {
+    use dancegen_server::job::{JobParams, JobState};
+    use dancegen_server::store::{Store, now};
+    let data = tempfile::tempdir().unwrap();
+    let db = data.path().join("jobs.sqlite3");
+    let day = 86_400.0;
+    // id, the state it ended in, days since it ended.
+    let jobs: [(&str, JobState, f64); 4] = [
+        ("olddone", JobState::Done, 40.0),
+        ("oldfailed", JobState::Failed, 31.0),
+        ("oldcancelled", JobState::Cancelled, 60.0),
+        ("recentdone", JobState::Done, 29.0),
+    ];
+    {
+        let (store, _) = Store::open(&db).unwrap();
+        let params = JobParams::parse(r#"{"system": "solo"}"#, 4).unwrap();
+        for (id, state, _) in &jobs {
+            store.insert(id, &params, "song.ogg", None).unwrap();
+            store.claim().unwrap().unwrap();
+            store.finish(id, *state, None, &[]).unwrap();
+            let dir = data.path().join("jobs").join(id);
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(dir.join("song.ogg"), b"x").unwrap();
+        }
+    }
+    {
+        // Back-date them (the store stamps "now").
+        let conn = rusqlite::Connection::open(&db).unwrap();
+        for (id, _, days) in &jobs {
+            let t = now() - days * day;
+            conn.execute(
+                "UPDATE jobs SET created = ?2, finished = ?2 WHERE id = ?1",
+                rusqlite::params![id, t],
+            )
+            .unwrap();
+        }
+    }
+    let start = |keep: Option<f64>| {
+        let mut config = ServeConfig::new(data.path());
+        config.addr = "127.0.0.1:0".parse().unwrap();
+        config.keep = keep.map(|d| Duration::from_secs_f64(d * day));
+        let server = dancegen_server::spawn(config).expect("server starts");
+        let client = dancegen_server::client::Client::new(server.url());
+        let present: Vec<bool> = jobs
+            .iter()
+            .map(|(id, ..)| client.get(&format!("/api/jobs/{id}")).unwrap().status == 200)
+            .collect();
+        server.stop();
+        present
+    };
+    assert_eq!(start(None), [true; 4], "no keep time: every job stays");
+    let present = start(Some(30.0));
+    for ((id, state, _), here) in jobs.iter().zip(&present) {
+        let dir = data.path().join("jobs").join(id);
+        let expired = matches!(id, &"olddone" | &"oldfailed" | &"oldcancelled");
+        assert_eq!(*here, !expired, "{id} ({state:?})");
+        assert_eq!(dir.exists(), !expired, "{id}'s folder");
+    }
 }
