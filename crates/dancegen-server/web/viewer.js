@@ -350,6 +350,8 @@ export class Viewer {
       box: root.querySelector('#variations-box'),
       skeleton: root.querySelector('#show-skeleton'),
       grid: root.querySelector('#show-grid'),
+      loop: root.querySelector('#loop'),
+      fullscreen: root.querySelector('#fullscreen'),
     };
     this.audio = document.createElement('audio');
     this.audio.preload = 'auto';
@@ -457,7 +459,10 @@ export class Viewer {
   tick(force = false) {
     const a = this.audio;
     if (!a.paused && a.currentTime - this.start >= this.duration) {
-      a.pause(); // The dance is over; the rest of the song would show a frozen pose.
+      // The dance is over: from its start again with Loop, else stop (the rest of the song
+      // would show a frozen pose).
+      if (this.el.loop?.checked) a.currentTime = this.start;
+      else a.pause();
     }
     const t = this.danceTime();
     const moved = t !== this.lastTime;
@@ -557,6 +562,18 @@ export class Viewer {
       });
     }
     for (const b of this.root.querySelectorAll('.view')) on(b, 'click', () => this.setView(b.dataset.view));
+    // The variations over the whole screen; the browser's Esc leaves.
+    const fs = this.el.fullscreen;
+    if (fs) {
+      fs.hidden = !document.fullscreenEnabled;
+      on(fs, 'click', () => {
+        if (document.fullscreenElement) document.exitFullscreen().catch(() => {});
+        else this.el.box.requestFullscreen().catch((e) => this.onError?.(new Error(`Full screen was refused: ${e.message}`)));
+      });
+      on(document, 'fullscreenchange', () => {
+        fs.textContent = document.fullscreenElement ? 'Leave full screen' : 'Full screen';
+      });
+    }
     on(this.el.skeleton, 'change', () => {
       for (const s of this.stages) s.showSkeleton(this.el.skeleton.checked);
       this.dirty = true;

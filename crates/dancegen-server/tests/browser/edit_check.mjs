@@ -84,7 +84,10 @@ try {
       await page.evaluate(() => window.__viewer.seek(1));
       await page.click('#mark-from');
       result.marked = await page.$eval('#edit-from', (i) => i.value);
+      // Clicking the mark button scrolled the page down to it; the strip is at the top of
+      // the viewer, so back up to it first (as a user would).
       const r = await page.$eval('#range-track', (t) => {
+        t.scrollIntoView({ block: 'center' });
         const b = t.getBoundingClientRect();
         return { x: b.left, y: b.top + b.height / 2, w: b.width };
       });

@@ -141,6 +141,34 @@ try {
         return { t0, t1, moved };
       }, PLAY_MS));
     });
+    // The playback controls: every speed, Loop (played over the dance's end it starts again),
+    // full screen. The dance of the test jobs starts at the song's 0 s.
+    await step('controls', async () => {
+      const c = {};
+      c.speeds = await page.$$eval('.speed', (bs) => bs.map((b) => Number(b.dataset.rate)));
+      await page.click('.speed[data-rate="2"]');
+      c.rate = await page.evaluate(() => window.__viewer.audio().playbackRate);
+      await page.click('.speed[data-rate="1"]');
+      await page.click('#loop');
+      c.loop = await within(30_000, 'loop', page.evaluate(async () => {
+        const v = window.__viewer;
+        const a = v.audio();
+        const end = Number(document.getElementById('scrub').max);
+        await v.seek(end - 0.4);
+        await v.play();
+        await new Promise((r) => setTimeout(r, 1200));
+        const after = { time: a.currentTime, paused: a.paused, end };
+        a.pause();
+        return after;
+      }));
+      await page.click('#loop');
+      c.fullscreenEnabled = await page.evaluate(() => document.fullscreenEnabled);
+      await page.click('#fullscreen');
+      await new Promise((r) => setTimeout(r, 300));
+      c.fullscreen = await page.evaluate(() => document.fullscreenElement?.id ?? null);
+      await page.evaluate(() => document.exitFullscreen?.().catch(() => {}));
+      result.controls = c;
+    });
     await step('downloads', async () => {
       result.downloads = await page.evaluate(() => ({
         variations: [...document.querySelectorAll('#variations-box figure')].map((f) =>

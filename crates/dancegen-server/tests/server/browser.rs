@@ -154,6 +154,30 @@ fn check_page(report: &Value, base: &str, name: &str) {
     );
 }
 
+/// The playback controls (issue 45): speeds 0.25× to 2× set the song's rate, Loop starts the
+/// dance again when it ends (played from 0.4 s before its end for 1.2 s, the song is back
+/// near its start and still playing), and Full screen gives the variations the screen.
+fn check_controls(report: &Value, name: &str) {
+    let c = &report["controls"];
+    let speeds: Vec<f64> = c["speeds"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{name}: no speeds: {c}"))
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(speeds, [0.25, 0.5, 1.0, 1.5, 2.0], "{name}: {c}");
+    assert_eq!(c["rate"].as_f64(), Some(2.0), "{name}: {c}");
+    let lp = &c["loop"];
+    assert_eq!(lp["paused"], false, "{name}: the loop stopped: {lp}");
+    assert!(
+        lp["time"].as_f64().unwrap() < 1.5,
+        "{name}: no loop back to the start: {lp}"
+    );
+    if c["fullscreenEnabled"] == true {
+        assert_eq!(c["fullscreen"], "variations-box", "{name}: {c}");
+    }
+}
+
 /// Every download link of the page saves under the job's name for it
 /// (`<song>-<system>-seed<k>.<ext>`), the face file says it is the face, and "Download all"
 /// points at the job's zip.
@@ -214,6 +238,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         let report = view(&s, id, name);
         check_page(&report, &base, name);
         check_downloads(&report, &job, name);
+        check_controls(&report, name);
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
