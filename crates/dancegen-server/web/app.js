@@ -80,6 +80,7 @@ window.__viewer = {
   get ready() { return viewerReady.promise; },
   seek: (t) => openViewer().seek(t),
   joints: (v = 0) => openViewer().joints(v),
+  figures: (v = 0) => openViewer().figures(v),
   audio: () => openViewer().audio,
   play: () => openViewer().play(),
   count: () => openViewer().count,

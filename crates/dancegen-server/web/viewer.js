@@ -35,6 +35,37 @@ const SEEK_TIMEOUT_MS = 10000;
 
 /** Camera field of view, degrees. */
 const FOV = 40;
+/** Head sphere radius and its centre above the head joint (the base of the skull), metres. */
+const HEAD_RADIUS = 0.1;
+const HEAD_LIFT = 0.09;
+/**
+ * Contact shadow under each dancer: its radius with the feet on the floor, how much it grows
+ * per metre the lowest joint is above the floor, and its darkness on the floor. A dancer in
+ * the air gets a paler, wider shadow, so floating shows as it does in the MP4.
+ */
+const SHADOW_RADIUS = 0.32;
+const SHADOW_GROWTH = 0.8;
+const SHADOW_OPACITY = 0.5;
+/** Height above the floor at which the shadow has faded to its palest, metres. */
+const SHADOW_FADE_HEIGHT = 0.5;
+/** Joints this close above a dancer's lowest one are its supporting feet (the shadow's centre). */
+const SUPPORT_BAND = 0.05;
+
+/** A soft round shadow texture (dark centre fading to nothing at the rim). */
+function shadowTexture() {
+  const c = document.createElement('canvas');
+  c.width = c.height = 64;
+  const g = c.getContext('2d');
+  const r = g.createRadialGradient(32, 32, 0, 32, 32, 32);
+  r.addColorStop(0, 'rgba(20,18,15,1)');
+  r.addColorStop(0.55, 'rgba(20,18,15,0.55)');
+  r.addColorStop(1, 'rgba(20,18,15,0)');
+  g.fillStyle = r;
+  g.fillRect(0, 0, 64, 64);
+  const t = new THREE.CanvasTexture(c);
+  t.colorSpace = THREE.SRGBColorSpace;
+  return t;
+}
 
 /** Formats seconds as m:ss.s for the clock. */
 export function formatTime(s) {
@@ -223,8 +254,90 @@ class Stage {
     this.helper.setColors(new THREE.Color(0x1f1d1a), new THREE.Color(0xc8581f));
     this.helper.visible = false;
     this.scene.add(this.helper);
+    this.addHeadsAndShadows();
+    this.addLegend();
     this.message.remove();
     this.frame();
+  }
+
+  /** The skinned body that dancer `d`'s bones move (its material gives the dancer's colour). */
+  bodyOf(d) {
+    const root = this.dancers[d][0];
+    return this.meshes.find((m) => m.skeleton?.bones.includes(root)) ?? this.meshes[d] ?? null;
+  }
+
+  /**
+   * A head on every figure (a sphere on the head bone, in the body's colour: the capsule body
+   * ends at the neck) and a contact shadow under it on the floor ([`updateShadows`]).
+   */
+  addHeadsAndShadows() {
+    const texture = shadowTexture();
+    this.heads = [];
+    this.shadows = this.dancers.map((bones, d) => {
+      const body = this.bodyOf(d);
+      // The head bone under any rig's name (three.js drops the '/' of `dancer{d}/head` and
+      // the ':' of `mixamorig:Head`).
+      const head = bones.find((b) => /head$/i.test(b.name ?? ''));
+      if (head && body) {
+        const sphere = new THREE.Mesh(new THREE.SphereGeometry(HEAD_RADIUS, 24, 16), body.material);
+        sphere.position.set(0, HEAD_LIFT, 0);
+        sphere.name = 'head-sphere';
+        head.add(sphere);
+        this.heads.push(sphere);
+      }
+      const shadow = new THREE.Mesh(
+        new THREE.CircleGeometry(1, 40),
+        new THREE.MeshBasicMaterial({ map: texture, transparent: true, depthWrite: false, opacity: SHADOW_OPACITY }),
+      );
+      shadow.rotation.x = -Math.PI / 2;
+      shadow.renderOrder = 1;
+      shadow.name = 'contact-shadow';
+      this.scene.add(shadow);
+      return shadow;
+    });
+  }
+
+  /**
+   * Each shadow under its dancer's supporting feet (the joints within a few centimetres of its
+   * lowest one), wider and paler the higher that lowest joint is above the floor.
+   */
+  updateShadows() {
+    if (!this.shadows) return;
+    this.root.updateMatrixWorld(true);
+    this.dancers.forEach((bones, d) => {
+      const at = bones.map((b) => b.getWorldPosition(new THREE.Vector3()));
+      const lowest = Math.min(...at.map((p) => p.y));
+      const height = Math.max(0, lowest);
+      const feet = at.filter((p) => p.y <= lowest + SUPPORT_BAND);
+      const x = feet.reduce((a, p) => a + p.x, 0) / feet.length;
+      const z = feet.reduce((a, p) => a + p.z, 0) / feet.length;
+      const s = this.shadows[d];
+      s.position.set(x, 0.003, z);
+      s.scale.setScalar(SHADOW_RADIUS + SHADOW_GROWTH * height);
+      const fade = Math.min(height / SHADOW_FADE_HEIGHT, 1);
+      s.material.opacity = SHADOW_OPACITY * (1 - 0.75 * fade);
+    });
+  }
+
+  /**
+   * Who is who, over the picture: in a duet the given leader and the generated partner, in a
+   * group each dancer's number, each with its body's colour.
+   */
+  addLegend() {
+    const names = this.variation.dancerNames;
+    if (!names || names.length !== this.dancers.length) return;
+    const legend = document.createElement('ul');
+    legend.className = 'legend';
+    names.forEach((name, d) => {
+      const li = document.createElement('li');
+      const dot = document.createElement('span');
+      dot.className = 'dot';
+      const colour = this.bodyOf(d)?.material?.color;
+      if (colour) dot.style.background = `#${colour.getHexString(THREE.SRGBColorSpace)}`;
+      li.append(dot, document.createTextNode(name));
+      legend.append(li);
+    });
+    this.canvasBox.append(legend);
   }
 
   /** Length of the dance, seconds. */
@@ -240,6 +353,7 @@ class Stage {
     this.action.paused = false;
     this.action.enabled = true;
     this.mixer.setTime(clamped);
+    this.updateShadows();
   }
 
   /** World positions of every joint: [dancer][joint] = [x, y, z]. */
@@ -269,6 +383,7 @@ class Stage {
       this.pose((this.duration * i) / samples);
       this.root.updateMatrixWorld(true);
       for (const bones of this.dancers) for (const b of bones) box.expandByPoint(b.getWorldPosition(p));
+      for (const h of this.heads ?? []) box.expandByPoint(h.getWorldPosition(p).setY(p.y + HEAD_RADIUS));
     }
     this.pose(0);
     return box;
@@ -357,7 +472,14 @@ export class Viewer {
     this.audio.preload = 'auto';
     this.audio.className = 'song';
     root.append(this.audio);
-    this.stages = (job.variations ?? []).map((v, i) => new Stage(i, v, this.el.box));
+    // Who is who in the picture's legend: a duet's given leader and generated partner (the
+    // .glb holds the leader first), a group's dancers by number.
+    const system = job.params?.system;
+    const dancers = Number(job.params?.dancers) || 0;
+    const dancerNames = system === 'duet' ? ['Leader (given)', 'Partner (generated)']
+      : system === 'group' && dancers > 1 ? Array.from({ length: dancers }, (_, d) => `Dancer ${d + 1}`)
+        : null;
+    this.stages = (job.variations ?? []).map((v, i) => new Stage(i, { ...v, dancerNames }, this.el.box));
     this.root.style.setProperty('--variations', String(Math.max(1, this.stages.length)));
     this.duration = 0;
     this.view = 'front';
@@ -513,6 +635,27 @@ export class Viewer {
     const s = this.stages[v];
     if (!s) throw new Error(`no variation ${v} (there are ${this.stages.length})`);
     return s.joints();
+  }
+
+  /**
+   * What variation `v` draws around its joints (the browser test reads it): the head spheres'
+   * centres, each dancer's contact shadow (floor position, radius, opacity), pelvis and lowest
+   * joint height, and the legend's lines.
+   */
+  figures(v = 0) {
+    const s = this.stages[v];
+    if (!s) throw new Error(`no variation ${v} (there are ${this.stages.length})`);
+    s.scene.updateMatrixWorld(true);
+    const p = new THREE.Vector3();
+    return {
+      heads: (s.heads ?? []).map((h) => h.getWorldPosition(p).toArray()),
+      shadows: (s.shadows ?? []).map((m) => ({ at: [m.position.x, m.position.y, m.position.z], radius: m.scale.x, opacity: m.material.opacity })),
+      pelvis: s.dancers.map((bones) => bones[0].getWorldPosition(p).toArray()),
+      lowest: s.dancers.map((bones) => Math.min(...bones.map((b) => b.getWorldPosition(p).y))),
+      lowestAt: s.dancers.map((bones) => bones.map((b) => b.getWorldPosition(new THREE.Vector3()))
+        .reduce((a, q) => (q.y < a.y ? q : a)).toArray()),
+      legend: [...s.canvasBox.querySelectorAll('.legend li')].map((li) => li.textContent),
+    };
   }
 
   setView(view) {

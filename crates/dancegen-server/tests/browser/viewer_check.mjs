@@ -12,6 +12,8 @@
  *   {"joints": {"1": [per variation: [dancer][24][x,y,z]], "2": ..., "5": ...},
  *    "seeked": {"1": {"audio": s, "dance": s}, ...},
  *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
+ *    "figures": [per variation at 1 s: {heads: [[x,y,z]], shadows: [{at, radius, opacity}],
+ *                pelvis: [[x,y,z]], lowest: [y], legend: [text]}],
  *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
  *    "requests": [every URL the page asked for], "errors": [page errors, console errors, HTTP ≥ 400]}
  *
@@ -114,6 +116,14 @@ try {
         result.seeked[t] = r.seeked;
       });
     }
+    // What is drawn around the joints, at the first seek time: heads, contact shadows, legend.
+    await step('figures', async () => {
+      result.figures = await within(30_000, 'read the figures', page.evaluate(async (t) => {
+        const v = window.__viewer;
+        await v.seek(t);
+        return Array.from({ length: v.count() }, (_, i) => v.figures(i));
+      }, SEEK_TIMES[0]));
+    });
     const viewerBox = await page.$('#viewer');
     for (const t of SHOT_TIMES) {
       await step(`screenshot at ${t} s`, async () => {

@@ -178,6 +178,69 @@ fn check_controls(report: &Value, name: &str) {
     }
 }
 
+/// What the viewer draws besides the skinned bodies (issue 45), at 1 s of the first variation:
+/// a head over every dancer's head joint, a contact shadow on the floor under every dancer's
+/// feet (within 0.3 m of its lowest joint; paler the higher that joint), and in a duet the
+/// legend naming the given leader and the generated partner.
+fn check_figures(report: &Value, name: &str, dancers: usize) {
+    let f = &report["figures"][0];
+    let arr = |k: &str| {
+        f[k].as_array()
+            .unwrap_or_else(|| panic!("{name}: no {k}: {f}"))
+            .clone()
+    };
+    let (heads, shadows, pelvis, lowest) =
+        (arr("heads"), arr("shadows"), arr("pelvis"), arr("lowest"));
+    let lowest_at = arr("lowestAt");
+    assert_eq!(heads.len(), dancers, "{name}: heads {f}");
+    assert_eq!(shadows.len(), dancers, "{name}: shadows {f}");
+    let v = |x: &Value, i: usize| x[i].as_f64().unwrap();
+    for d in 0..dancers {
+        // The head is the highest thing of its dancer, above the pelvis.
+        assert!(
+            v(&heads[d], 1) > v(&pelvis[d], 1) + 0.3,
+            "{name} dancer {d}: head {f}"
+        );
+        let s = &shadows[d];
+        let at = &s["at"];
+        let foot = &lowest_at[d];
+        let off = (v(at, 0) - v(foot, 0)).hypot(v(at, 2) - v(foot, 2));
+        assert!(
+            off < 0.3,
+            "{name} dancer {d}: the shadow is {off} m from the lowest joint: {f}"
+        );
+        assert!(
+            v(at, 1).abs() < 0.01,
+            "{name} dancer {d}: the shadow is off the floor: {f}"
+        );
+        let height = lowest[d].as_f64().unwrap().max(0.0);
+        let opacity = s["opacity"].as_f64().unwrap();
+        let want = 0.5 * (1.0 - 0.75 * (height / 0.5).min(1.0));
+        assert!(
+            (opacity - want).abs() < 1e-6,
+            "{name} dancer {d}: opacity {opacity} at {height} m: {f}"
+        );
+    }
+    let legend: Vec<&str> = f["legend"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    if name == "duet" {
+        assert_eq!(
+            legend,
+            ["Leader (given)", "Partner (generated)"],
+            "{name}: {f}"
+        );
+    } else {
+        assert!(
+            legend.is_empty(),
+            "{name}: a solo dance needs no legend: {f}"
+        );
+    }
+}
+
 /// Every download link of the page saves under the job's name for it
 /// (`<song>-<system>-seed<k>.<ext>`), the face file says it is the face, and "Download all"
 /// points at the job's zip.
@@ -239,6 +302,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         check_page(&report, &base, name);
         check_downloads(&report, &job, name);
         check_controls(&report, name);
+        check_figures(&report, name, if name == "duet" { 2 } else { 1 });
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
