@@ -5,6 +5,10 @@
 //! - `GET /api/jobs/{id}/events` → Server-Sent Events, the job object on every change
 //! - `GET /api/jobs/{id}/files/{name}` → a job file, with HTTP Range (the viewer seeks the song)
 //! - `DELETE /api/jobs/{id}` → cancels a queued or running job, removes a finished one
+//! - `GET /api/jobs` → `{"jobs": [...]}`, the library: the newest jobs' objects, newest first
+//! - `PATCH /api/jobs/{id}` (JSON `{"name"}`) → names the dance in the library
+//! - `POST /api/jobs/{id}/again` (JSON `{"seed"}`, optional) → `202 {"id"}`: a new job with the
+//!   job's song, leader and settings
 //! - `GET /api/systems` → the systems, their genres and the limits
 //! - anything else → the embedded viewer ([`crate::web`])
 
@@ -33,6 +37,7 @@ use crate::error::ApiError;
 use crate::files;
 use crate::job::{JobParams, JobState};
 use crate::jobs::Jobs;
+use crate::library;
 use crate::upload;
 use crate::{download_all, download_names};
 
@@ -53,7 +58,7 @@ const FORM_OVERHEAD: usize = 64 << 10;
 pub fn router(state: AppState) -> Router {
     let limits = state.limits.clone();
     let upload = Router::new()
-        .route("/api/jobs", post(submit))
+        .route("/api/jobs", post(submit).get(library))
         .layer(DefaultBodyLimit::max(limits.upload_bytes + FORM_OVERHEAD))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
@@ -62,7 +67,8 @@ pub fn router(state: AppState) -> Router {
         .layer(RequestBodyDeadlineLayer::new(limits.body_deadline));
     let rest = Router::new()
         .route("/api/systems", get(systems))
-        .route("/api/jobs/{id}", get(status).delete(delete))
+        .route("/api/jobs/{id}", get(status).delete(delete).patch(rename))
+        .route("/api/jobs/{id}/again", post(again))
         .route("/api/jobs/{id}/events", get(events))
         .route("/api/jobs/{id}/versions", get(versions))
         .route("/api/jobs/{id}/files/{name}", get(file))
@@ -233,25 +239,122 @@ async fn submit(
         .await
         .map_err(|e| ApiError::internal(format!("checking the upload: {e}")))?
     };
+    let job = NewJob {
+        id,
+        incoming,
+        params,
+        song: song_name,
+        leader: leader_name,
+    };
+    enqueue(&s, job, prepared)
+}
+
+/// A job whose files are ready in its hidden `incoming` folder.
+struct NewJob {
+    id: String,
+    incoming: std::path::PathBuf,
+    params: JobParams,
+    song: String,
+    leader: Option<String>,
+}
+
+/// Moves a prepared job's folder into place and queues it (`202 {"id"}`), or, when preparing
+/// it failed or the queue is full, removes what was prepared.
+fn enqueue(
+    s: &AppState,
+    job: NewJob,
+    prepared: Result<(), ApiError>,
+) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
     let queued = prepared.and_then(|()| {
         let _one_at_a_time = s.submit_lock.lock().unwrap_or_else(|e| e.into_inner());
-        check_queue(&s)?;
-        std::fs::rename(&incoming, s.jobs.job_dir(&id))
-            .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))?;
-        s.jobs
-            .store
-            .insert(&id, &params, &song_name, leader_name.as_deref())?;
-        Ok(())
+        check_queue(s).and_then(|()| {
+            std::fs::rename(&job.incoming, s.jobs.job_dir(&job.id))
+                .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))?;
+            s.jobs
+                .store
+                .insert(&job.id, &job.params, &job.song, job.leader.as_deref())?;
+            Ok(())
+        })
     });
+    let id = job.id;
     if let Err(e) = queued {
-        let _ = std::fs::remove_dir_all(&incoming);
+        let _ = std::fs::remove_dir_all(&job.incoming);
         let _ = std::fs::remove_dir_all(s.jobs.job_dir(&id));
         return Err(e);
     }
-    tracing::info!("job {id}: queued ({})", params.system);
+    tracing::info!("job {id}: queued ({})", job.params.system);
     s.jobs.publish(&id);
     s.jobs.notify_work();
     Ok((StatusCode::ACCEPTED, Json(serde_json::json!({ "id": id }))))
+}
+
+/// `GET /api/jobs`: the library.
+async fn library(State(s): State<AppState>) -> Result<Json<serde_json::Value>, ApiError> {
+    let jobs = tokio::task::spawn_blocking(move || s.jobs.library(library::LIBRARY_LIMIT))
+        .await
+        .map_err(|e| ApiError::internal(format!("listing the jobs: {e}")))??;
+    Ok(Json(serde_json::json!({ "jobs": jobs })))
+}
+
+#[derive(serde::Deserialize)]
+struct Rename {
+    name: Option<String>,
+}
+
+/// `PATCH /api/jobs/{id}` `{"name"}`: the dance's name in the library.
+async fn rename(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    body: Result<Json<Rename>, axum::extract::rejection::JsonRejection>,
+) -> Result<Json<crate::job::JobView>, ApiError> {
+    let Json(body) = body.map_err(|e| {
+        ApiError::field(
+            "name",
+            format!("send JSON {{\"name\": \"...\"}}: {}", e.body_text()),
+        )
+    })?;
+    let name = library::checked_name(body.name.as_deref())?;
+    if !files::valid_id(&id) || !s.jobs.store.rename(&id, name.as_deref())? {
+        return Err(no_job(&id));
+    }
+    s.jobs.publish(&id);
+    s.jobs.view(&id)?.map(Json).ok_or_else(|| no_job(&id))
+}
+
+#[derive(serde::Deserialize, Default)]
+struct Again {
+    seed: Option<u64>,
+}
+
+/// `POST /api/jobs/{id}/again` `{"seed"}`: a new job with this one's song, leader and
+/// settings (another seed when given).
+async fn again(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    body: Option<Json<Again>>,
+) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
+    let seed = body.map(|Json(b)| b).unwrap_or_default().seed;
+    if !files::valid_id(&id) {
+        return Err(no_job(&id));
+    }
+    let row = s.jobs.store.get(&id)?.ok_or_else(|| no_job(&id))?;
+    let params = library::again_params(&row, seed)?;
+    s.catalog.check(&params)?;
+    check_queue(&s)?;
+    let new_id = s.jobs.new_id();
+    let incoming = files::jobs_dir(s.jobs.data_dir()).join(format!(".incoming-{new_id}"));
+    let from = s.jobs.job_dir(&id);
+    let job = NewJob {
+        id: new_id,
+        incoming: incoming.clone(),
+        params,
+        song: row.song.clone(),
+        leader: row.leader.clone(),
+    };
+    let copied = tokio::task::spawn_blocking(move || library::copy_inputs(&from, &row, &incoming))
+        .await
+        .map_err(|e| ApiError::internal(format!("copying the song: {e}")))?;
+    enqueue(&s, job, copied)
 }
 
 fn check_queue(s: &AppState) -> Result<(), ApiError> {

@@ -95,6 +95,21 @@ impl Client {
         reply(self.agent.delete(&self.url(path)).call())
     }
 
+    /// `method` (`POST`, `PATCH`) of `path` with the JSON text `json` as its body.
+    pub fn send_json(&self, method: &str, path: &str, json: &str) -> Result<Reply, String> {
+        let url = self.url(path);
+        let r = match method {
+            "POST" => self.agent.post(&url),
+            "PATCH" => self.agent.patch(&url),
+            "PUT" => self.agent.put(&url),
+            other => return Err(format!("send_json: {other} is not a method with a body")),
+        };
+        reply(
+            r.header("Content-Type", "application/json")
+                .send(json.as_bytes()),
+        )
+    }
+
     /// `POST /api/jobs` with `parts`.
     pub fn submit(&self, parts: &[Part]) -> Result<Reply, String> {
         let (content_type, body) = multipart(parts);

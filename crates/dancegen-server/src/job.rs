@@ -393,6 +393,10 @@ pub struct JobView {
     pub attempts: u32,
     /// Queued jobs ahead of this one (0 = next), while it waits.
     pub queue_position: Option<usize>,
+    /// The name the user gave it in the library (`null`: none; the page shows the song's).
+    pub name: Option<String>,
+    /// URL of its picture in the library (a finished dance's first variation), if drawn.
+    pub thumbnail: Option<String>,
 }
 
 /// The stem of variation `k`'s files: `dance` (what the CLI's examples write), then

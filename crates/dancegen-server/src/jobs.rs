@@ -139,6 +139,8 @@ impl Jobs {
             error: row.error.clone(),
             warnings: row.warnings.clone(),
             song: files.get(&row.song).cloned(),
+            name: row.name.clone(),
+            thumbnail: files.get(crate::thumbnail::THUMBNAIL).cloned(),
             files,
             system: row.params.system.clone(),
             dancers: row.params.dancer_count(),
@@ -152,6 +154,16 @@ impl Jobs {
                 _ => None,
             },
         }
+    }
+
+    /// The library: the newest `limit` jobs' objects, newest first.
+    pub fn library(&self, limit: usize) -> Result<Vec<JobView>, ApiError> {
+        Ok(self
+            .store
+            .newest(limit)?
+            .iter()
+            .map(|row| self.view_of(row))
+            .collect())
     }
 
     /// The job's current object, `None` when there is no such job.

@@ -32,6 +32,8 @@ pub struct JobRow {
     pub attempts: u32,
     /// What the user should know about the finished dance (a song without a beat).
     pub warnings: Vec<String>,
+    /// The name the user gave the dance in the library (`None`: the song's).
+    pub name: Option<String>,
 }
 
 pub struct Store {
@@ -67,11 +69,11 @@ CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
 ";
 
 const COLUMNS: &str = "id, state, stage, progress, eta_s, error, params, song, leader, created, \
-     finished, attempts, warnings";
+     finished, attempts, warnings, name";
 
 /// Columns added after the first release, with their types: a database an older server made
 /// gets them when it is opened (`ALTER TABLE ... ADD COLUMN`; old rows read them as NULL).
-const ADDED_COLUMNS: [(&str, &str); 1] = [("warnings", "TEXT")];
+const ADDED_COLUMNS: [(&str, &str); 2] = [("warnings", "TEXT"), ("name", "TEXT")];
 
 fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
     let state: String = r.get(1)?;
@@ -96,6 +98,7 @@ fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
             None => Vec::new(),
             Some(text) => serde_json::from_str(&text).map_err(|e| bad(format!("warnings: {e}")))?,
         },
+        name: r.get(13)?,
     })
 }
 
@@ -270,6 +273,23 @@ impl Store {
         Ok(self
             .conn()
             .execute("DELETE FROM jobs WHERE id = ?1", [id])?
+            == 1)
+    }
+
+    /// The newest `limit` jobs, newest first (the library).
+    pub fn newest(&self, limit: usize) -> rusqlite::Result<Vec<JobRow>> {
+        let conn = self.conn();
+        let mut st = conn.prepare(&format!(
+            "SELECT {COLUMNS} FROM jobs ORDER BY seq DESC LIMIT ?1"
+        ))?;
+        st.query_map([limit as i64], row_of)?.collect()
+    }
+
+    /// Gives job `id` the library name `name` (`None` clears it); `true` when there is a job.
+    pub fn rename(&self, id: &str, name: Option<&str>) -> rusqlite::Result<bool> {
+        Ok(self
+            .conn()
+            .execute("UPDATE jobs SET name = ?2 WHERE id = ?1", params![id, name])?
             == 1)
     }
 

@@ -138,6 +138,11 @@ fn run_job(
             .map(|e| format!(": {e}"))
             .unwrap_or_default()
     );
+    if state == JobState::Done
+        && let Err(e) = crate::thumbnail::write_thumbnail(&jobs.job_dir(id))
+    {
+        tracing::warn!("job {id}: no picture for the library: {e}");
+    }
     if let Err(e) = jobs.store.finish(id, state, error.as_deref(), &warnings) {
         tracing::error!("job {id}: recording its end: {e}");
     }

@@ -23,6 +23,7 @@
  */
 import { Viewer, downloadLinks } from './viewer.js';
 import { EditPanel, fetchVersions, renderVersions } from './edit.js';
+import { Library, danceTitle } from './library.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -91,9 +92,16 @@ window.__viewer = {
 // ---------------------------------------------------------------------------------------------
 // Words on the page.
 
-function showNotice(text, kind = 'error') {
+/** Shows `text`, and after it the link `link` (`{href, text}`) when given. */
+function showNotice(text, kind = 'error', link = null) {
   const n = $('notice');
   n.textContent = text;
+  if (link) {
+    const a = document.createElement('a');
+    a.href = link.href;
+    a.textContent = link.text;
+    n.append(' ', a);
+  }
   n.dataset.kind = kind;
   n.hidden = false;
 }
@@ -149,8 +157,14 @@ function route() {
   $('submit-view').hidden = Boolean(id);
   $('job-view').hidden = !id;
   if (id) openJob(id);
-  else showForm();
+  else {
+    showForm();
+    library.refresh();
+  }
 }
+
+/** "My dances", under the form. */
+const library = new Library($('library'), (text) => showNotice(text));
 
 function closeJob() {
   events?.close();
@@ -484,18 +498,21 @@ function openJob(id) {
       const res = await fetch(url);
       if (events !== es) return;
       if (res.ok) showJob(await res.json());
-      else failJob((await responseError(res, `Job ${id}`)).message);
+      else if (res.status === 404) {
+        failJob('This dance is not on this server: it may have been deleted, or have expired.',
+          { href: './#library', text: 'See My dances' });
+      } else failJob((await responseError(res, `Job ${id}`)).message);
     } catch (err) {
       failJob(`Cannot reach the dancegen server (${err.message}).`);
     }
   };
 }
 
-function failJob(message) {
+function failJob(message, link = null) {
   $('job-status').textContent = 'Something went wrong.';
   $('job-progress').hidden = true;
   $('cancel').hidden = true;
-  showNotice(message);
+  showNotice(message, 'error', link);
   viewerReady.reject(new Error(message));
 }
 
@@ -553,7 +570,7 @@ function showJob(job) {
     }
     case 'done':
       $('progress-box').hidden = true;
-      document.title = 'dancegen — your dance';
+      document.title = `dancegen — ${danceTitle(job)}`;
       if (!viewer) showDone(job);
       break;
     case 'failed':

@@ -24,7 +24,9 @@ import { join } from 'node:path';
 import puppeteer from 'puppeteer-core';
 
 const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
-const CHOOSER_MS = 3000;
+// Generous: every check waits for a chooser that should open, and with the other server tests
+// generating dances on both cores, 3 s was once too short for the first one.
+const CHOOSER_MS = 15_000;
 
 const [baseArg, outDir, emptyFile] = process.argv.slice(2);
 if (!baseArg || !outDir || !emptyFile) {

@@ -867,3 +867,84 @@ fn finished_jobs_older_than_the_keep_time_are_removed_at_start() {
         assert_eq!(dir.exists(), !expired, "{id}'s folder");
     }
 }
+
+/// "My dances" (issue 45): the library lists the jobs newest first, each finished dance with
+/// its picture; a dance can be named (and the name cleared), checked in words; "again" makes a
+/// new job from a finished one with its song and settings and another seed; an edited version
+/// or an unknown job cannot be made again.
+#[test]
+fn the_library_lists_names_and_makes_a_dance_again() {
+    let s = start(Limits::default());
+    let first = s.submit_song(&demo_song(), r#"{"seed": 3, "end": 4}"#);
+    assert_eq!(first.status, 202, "{}", first.json);
+    let id = first.json["id"].as_str().unwrap().to_string();
+    let done = s.wait(&id, Duration::from_secs(600));
+    assert_eq!(done["state"], "done", "{done}");
+    let thumb = done["thumbnail"]
+        .as_str()
+        .expect("a finished dance has a picture");
+    let png = s.download(thumb);
+    assert!(png.starts_with(b"\x89PNG"), "the picture is a PNG");
+
+    let named = s.send_json(
+        "PATCH",
+        &format!("/api/jobs/{id}"),
+        r#"{"name": "  Warm-up  "}"#,
+    );
+    assert_eq!(named.status, 200, "{}", named.json);
+    assert_eq!(named.json["name"], "Warm-up");
+    let bad = s.send_json(
+        "PATCH",
+        &format!("/api/jobs/{id}"),
+        &format!(r#"{{"name": "{}"}}"#, "x".repeat(81)),
+    );
+    assert_eq!(
+        (bad.status, bad.json["field"].as_str()),
+        (400, Some("name")),
+        "{}",
+        bad.json
+    );
+    assert_eq!(
+        s.send_json("PATCH", "/api/jobs/nosuchjob", r#"{"name": "x"}"#)
+            .status,
+        404
+    );
+
+    let again = s.send_json("POST", &format!("/api/jobs/{id}/again"), r#"{"seed": 9}"#);
+    assert_eq!(again.status, 202, "{}", again.json);
+    let id2 = again.json["id"].as_str().unwrap().to_string();
+    let done2 = s.wait(&id2, Duration::from_secs(600));
+    assert_eq!(done2["state"], "done", "{done2}");
+    assert_eq!(done2["params"]["seed"], 9);
+    assert_eq!(done2["params"]["end"], done["params"]["end"]);
+    assert_eq!(done2["params"]["song_title"], done["params"]["song_title"]);
+    assert_eq!(
+        s.download(done2["song"].as_str().unwrap()),
+        std::fs::read(demo_song()).unwrap(),
+        "the same song"
+    );
+    assert_eq!(done2["name"], Value::Null, "a new dance has no name yet");
+
+    let list = s.get("/api/jobs");
+    assert_eq!(list.status, 200, "{}", list.json);
+    let ids: Vec<&str> = list.json["jobs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids, [id2.as_str(), id.as_str()], "newest first");
+    assert_eq!(list.json["jobs"][1]["name"], "Warm-up");
+    // Cleared, the song's name shows again.
+    let cleared = s.send_json("PATCH", &format!("/api/jobs/{id}"), r#"{"name": ""}"#);
+    assert_eq!(cleared.json["name"], Value::Null);
+    assert_eq!(
+        s.send_json("POST", "/api/jobs/nosuchjob/again", "{}")
+            .status,
+        404
+    );
+    // Deleted, it leaves the library.
+    assert_eq!(s.delete(&format!("/api/jobs/{id}")).status, 204);
+    let after = s.get("/api/jobs");
+    assert_eq!(after.json["jobs"].as_array().unwrap().len(), 1);
+}

@@ -503,3 +503,80 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
         assert!(width <= room, "{o} is cut: {width:.0} px in {room:.0} px");
     }
 }
+
+/// "My dances" in the page (issue 45): two finished dances are listed newest first with their
+/// pictures, song, system, seed and state, and the buttons for each; renaming through the
+/// page's prompt shows the new name; deleting asks first and removes the dance; the deleted
+/// dance's URL then says so in words and links to the library.
+#[test]
+fn my_dances_lists_renames_and_deletes_dances() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let mut ids = Vec::new();
+    for seed in [4, 5] {
+        let r = s.submit_song(&demo_song(), &format!(r#"{{"seed": {seed}, "end": 4}}"#));
+        assert_eq!(r.status, 202, "{}", r.json);
+        let id = r.json["id"].as_str().unwrap().to_string();
+        assert_eq!(s.wait(&id, JOB_TIMEOUT)["state"], "done");
+        ids.push(id);
+    }
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("library-shots");
+    let out = Command::new("node")
+        .arg(browser_dir().join("library_check.mjs"))
+        .arg(s.server.url())
+        .arg(&shots)
+        .output()
+        .expect("this test needs node (Node.js) on the PATH");
+    assert!(
+        out.status.success(),
+        "library_check failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    println!("library: {r}; screenshots in {}", shots.display());
+    assert_eq!(r["errors"], serde_json::json!([]), "{r}");
+    let items = r["items"].as_array().unwrap();
+    let listed: Vec<&str> = items.iter().map(|i| i["id"].as_str().unwrap()).collect();
+    assert_eq!(
+        listed,
+        [ids[1].as_str(), ids[0].as_str()],
+        "newest first: {r}"
+    );
+    for (item, seed) in items.iter().zip([5, 4]) {
+        assert_eq!(item["picture"], true, "{item}");
+        assert_eq!(item["title"], "demo_metal_madness_45s", "{item}");
+        let meta = item["meta"].as_str().unwrap();
+        assert!(
+            meta.starts_with(&format!("Solo · seed {seed} · done")),
+            "{item}"
+        );
+        assert_eq!(
+            item["buttons"],
+            serde_json::json!(["Open", "Rename", "Delete", "Again with another seed"]),
+            "{item}"
+        );
+    }
+    assert_eq!(r["renamed"], "Salsa night", "{r}");
+    let dialogs: Vec<&str> = r["dialogs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["type"].as_str().unwrap())
+        .collect();
+    assert_eq!(dialogs, ["prompt", "confirm"], "{r}");
+    assert_eq!(r["left"], serde_json::json!([ids[1]]), "{r}");
+    assert_eq!(s.get(&format!("/api/jobs/{}", ids[0])).status, 404);
+    assert_eq!(
+        s.get(&format!("/api/jobs/{}", ids[1])).json["name"],
+        "Salsa night"
+    );
+    let unknown = &r["unknown"];
+    assert!(
+        unknown["notice"]
+            .as_str()
+            .unwrap()
+            .contains("not on this server"),
+        "{unknown}"
+    );
+    assert_eq!(unknown["link"], "./#library", "{unknown}");
+}

@@ -63,6 +63,10 @@ impl TestServer {
         self.client.wait(id, timeout).unwrap()
     }
 
+    pub fn send_json(&self, method: &str, path: &str, json: &str) -> Reply {
+        self.client.send_json(method, path, json).unwrap()
+    }
+
     pub fn download(&self, path: &str) -> Vec<u8> {
         self.client.download(path).unwrap()
     }
