@@ -397,6 +397,8 @@ pub struct JobView {
     pub name: Option<String>,
     /// URL of its picture in the library (a finished dance's first variation), if drawn.
     pub thumbnail: Option<String>,
+    /// URL of the viewer's timeline (`timeline.json`: the danced part's waveform and beats).
+    pub timeline: Option<String>,
 }
 
 /// The stem of variation `k`'s files: `dance` (what the CLI's examples write), then

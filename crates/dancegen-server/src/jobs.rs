@@ -141,6 +141,7 @@ impl Jobs {
             song: files.get(&row.song).cloned(),
             name: row.name.clone(),
             thumbnail: files.get(crate::thumbnail::THUMBNAIL).cloned(),
+            timeline: files.get(crate::timeline::TIMELINE).cloned(),
             files,
             system: row.params.system.clone(),
             dancers: row.params.dancer_count(),

@@ -27,6 +27,7 @@ pub mod jobs;
 pub mod library;
 pub mod store;
 pub mod thumbnail;
+pub mod timeline;
 pub mod upload;
 pub mod user_words;
 pub mod versions;

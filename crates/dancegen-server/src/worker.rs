@@ -244,6 +244,17 @@ fn generate(
             }
         };
         let done = generator.run(&request, &on_progress, cancel)?;
+        if k == 0
+            && let Err(e) = crate::timeline::write_timeline(
+                &dir,
+                &dir.join(&row.song),
+                (done.start_s, done.end_s),
+                &done.beat_times_s,
+                done.tempo_bpm,
+            )
+        {
+            tracing::warn!("job {}: no timeline for the viewer: {e}", row.id);
+        }
         // Variations share the song: a warning about it is said once.
         for w in done.warnings {
             if !warnings.contains(&w) {

@@ -82,6 +82,7 @@ window.__viewer = {
   seek: (t) => openViewer().seek(t),
   joints: (v = 0) => openViewer().joints(v),
   figures: (v = 0) => openViewer().figures(v),
+  timeline: () => openViewer().timelineInfo(),
   audio: () => openViewer().audio,
   play: () => openViewer().play(),
   count: () => openViewer().count,

@@ -467,7 +467,10 @@ export class Viewer {
       grid: root.querySelector('#show-grid'),
       loop: root.querySelector('#loop'),
       fullscreen: root.querySelector('#fullscreen'),
+      waveform: root.querySelector('#waveform'),
     };
+    this.timelineUrl = job.timeline ?? null;
+    this.timeline = null;
     this.audio = document.createElement('audio');
     this.audio.preload = 'auto';
     this.audio.className = 'song';
@@ -539,8 +542,10 @@ export class Viewer {
       s.controls.addEventListener('change', () => this.cameraMoved(s));
     }
     this.wireControls();
+    await this.loadTimeline();
     const ro = new ResizeObserver(() => {
       for (const s of this.stages) s.resize();
+      this.drawTimeline(this.danceTime());
       this.dirty = true;
     });
     for (const s of this.stages) ro.observe(s.canvasBox);
@@ -597,11 +602,90 @@ export class Viewer {
     }
     for (const s of this.stages) s.frame();
     if (moved) {
+      this.drawTimeline(t);
       this.el.clock.textContent = `${formatTime(t)} / ${formatTime(this.duration)}`;
       if (!this.scrubbing) this.el.scrub.value = String(this.start + t);
     }
     this.lastTime = t;
     this.dirty = false;
+  }
+
+  /**
+   * The waveform and beats under the scrub bar (`timeline.json`, written by the server); a
+   * job without one (an older job) simply has no waveform. Clicking it goes there.
+   */
+  async loadTimeline() {
+    const canvas = this.el.waveform;
+    if (!canvas || !this.timelineUrl) return;
+    try {
+      const res = await fetch(this.timelineUrl);
+      if (!res.ok) return;
+      const t = await res.json();
+      if (!Array.isArray(t.peaks) || !Array.isArray(t.beats)) return;
+      this.timeline = t;
+    } catch {
+      return;
+    }
+    canvas.hidden = false;
+    const click = (e) => {
+      const r = canvas.getBoundingClientRect();
+      const u = Math.min(Math.max((e.clientX - r.left) / Math.max(r.width, 1), 0), 1);
+      this.seek(this.start + u * this.duration).catch((err) => this.onError?.(err));
+    };
+    canvas.addEventListener('click', click);
+    this.listeners.push(() => {
+      canvas.removeEventListener('click', click);
+      canvas.hidden = true;
+    });
+    this.drawTimeline(this.danceTime());
+  }
+
+  /** Draws the waveform (the part played so far in the accent colour) and the beats at `t`. */
+  drawTimeline(t) {
+    const canvas = this.el.waveform;
+    const tl = this.timeline;
+    if (!canvas || !tl || canvas.hidden) return;
+    const dpr = Math.min(window.devicePixelRatio || 1, 2);
+    const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
+    const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
+    if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
+    const g = canvas.getContext('2d');
+    g.clearRect(0, 0, w, h);
+    const length = Math.max(tl.duration || this.duration, 1e-6);
+    const played = (t / length) * w;
+    const n = tl.peaks.length;
+    for (let x = 0; x < w; x++) {
+      const peak = tl.peaks[Math.min(n - 1, Math.floor((x / w) * n))] || 0;
+      const bar = Math.max(1, peak * (h - 6));
+      g.fillStyle = x < played ? '#c8581f' : '#b9b4aa';
+      g.fillRect(x, (h - bar) / 2, 1, bar);
+    }
+    g.fillStyle = '#1f1d1a';
+    for (const b of tl.beats) {
+      const x = Math.round((b / length) * w);
+      g.fillRect(x, 0, Math.max(1, dpr), 3 * dpr);
+      g.fillRect(x, h - 3 * dpr, Math.max(1, dpr), 3 * dpr);
+    }
+  }
+
+  /** What the timeline shows (the browser test reads it). */
+  timelineInfo() {
+    const canvas = this.el.waveform;
+    const tl = this.timeline;
+    let inked = 0;
+    if (canvas && !canvas.hidden && canvas.width > 0) {
+      const px = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+      for (let i = 3; i < px.length; i += 4) if (px[i] > 0) inked++;
+    }
+    return {
+      shown: Boolean(canvas && !canvas.hidden),
+      beats: tl?.beats.length ?? 0,
+      peaks: tl?.peaks.length ?? 0,
+      firstBeat: tl?.beats[0] ?? null,
+      lastBeat: tl?.beats[tl.beats.length - 1] ?? null,
+      duration: tl?.duration ?? null,
+      inked,
+    };
   }
 
   /** Seeks the song to `t` (song seconds), waits for the audio to get there, poses, renders. */

@@ -12,6 +12,7 @@
  *   {"joints": {"1": [per variation: [dancer][24][x,y,z]], "2": ..., "5": ...},
  *    "seeked": {"1": {"audio": s, "dance": s}, ...},
  *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
+ *    "timeline": {shown, beats, peaks, firstBeat, lastBeat, duration, inked (painted pixels)},
  *    "figures": [per variation at 1 s: {heads: [[x,y,z]], shadows: [{at, radius, opacity}],
  *                pelvis: [[x,y,z]], lowest: [y], legend: [text]}],
  *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
@@ -123,6 +124,7 @@ try {
         await v.seek(t);
         return Array.from({ length: v.count() }, (_, i) => v.figures(i));
       }, SEEK_TIMES[0]));
+      result.timeline = await page.evaluate(() => window.__viewer.timeline());
     });
     const viewerBox = await page.$('#viewer');
     for (const t of SHOT_TIMES) {

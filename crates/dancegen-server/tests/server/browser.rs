@@ -241,6 +241,34 @@ fn check_figures(report: &Value, name: &str, dancers: usize) {
     }
 }
 
+/// The timeline under the scrub bar (issue 45): shown, with the job's waveform (800 slices)
+/// and beats (the demo song has a steady beat: more than one a second, inside the dance),
+/// and painted.
+fn check_timeline(report: &Value, job: &Value, name: &str) {
+    let t = &report["timeline"];
+    assert!(
+        job["timeline"].is_string(),
+        "{name}: the job has no timeline: {job}"
+    );
+    assert_eq!(t["shown"], true, "{name}: {t}");
+    assert_eq!(t["peaks"], 800, "{name}: {t}");
+    let duration = t["duration"].as_f64().unwrap();
+    let beats = t["beats"].as_u64().unwrap() as f64;
+    assert!(
+        beats > duration,
+        "{name}: {beats} beats in {duration} s: {t}"
+    );
+    let (first, last) = (
+        t["firstBeat"].as_f64().unwrap(),
+        t["lastBeat"].as_f64().unwrap(),
+    );
+    assert!(0.0 <= first && last <= duration, "{name}: {t}");
+    assert!(
+        t["inked"].as_u64().unwrap() > 1000,
+        "{name}: nothing drawn: {t}"
+    );
+}
+
 /// Every download link of the page saves under the job's name for it
 /// (`<song>-<system>-seed<k>.<ext>`), the face file says it is the face, and "Download all"
 /// points at the job's zip.
@@ -303,6 +331,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         check_downloads(&report, &job, name);
         check_controls(&report, name);
         check_figures(&report, name, if name == "duet" { 2 } else { 1 });
+        check_timeline(&report, &job, name);
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
