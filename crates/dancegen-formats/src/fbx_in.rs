@@ -3,7 +3,7 @@
 //! `convert`, `eval`, `--leader`, `--edit` and `--continue-from` read what `generate` writes.
 //!
 //! A dancer is a skin whose bones carry one of the rigs' SMPL 24 bone names
-//! ([`Rig::joint_names`], `dancer{d}/` prefixed in a scene of several), skins in file order.
+//! ([`crate::rig::Rig::joint_names`], `dancer{d}/` prefixed in a scene of several), skins in file order.
 //! The file is read in dancegen's conventions whatever it declares: ufbx converts it to Y-up,
 //! right-handed metres at the scene root. Each joint's SMPL rotation is its animated local
 //! rotation (the writer's rest rotations are identity; a skin bound with rotated bones is
@@ -17,11 +17,7 @@ use std::path::Path;
 use dancegen_motion::repr::motion::{POSE_DIMS, SMPL_JOINTS, SmplMotion};
 use dancegen_motion::rotation::{Mat3, Quat};
 
-use crate::rig::Rig;
-
-/// SMPL joints that may be missing (the hands, 22 and 23: a holistic skeleton has fingers
-/// instead).
-const OPTIONAL_JOINTS: [usize; 2] = [22, 23];
+use crate::rig::smpl_joints_by_name;
 
 /// Most frames read (an hour at 120 fps), so a time range cannot ask for gigabytes.
 const MAX_FRAMES: usize = 120 * 3600;
@@ -76,27 +72,7 @@ pub fn read_dance_fbx(path: &Path) -> Result<Vec<SmplMotion>, String> {
             name.rsplit_once('/').map_or(name, |(_, t)| t).to_string()
         };
         let names: Vec<String> = bones.iter().map(|(n, _)| tail(n)).collect();
-        // SMPL joint k -> bone index, in the first rig whose every body joint is there.
-        let smpl: Vec<Option<usize>> = Rig::ALL
-            .iter()
-            .map(|rig| {
-                rig.joint_names()
-                    .iter()
-                    .map(|want| names.iter().position(|n| n == want))
-                    .collect::<Vec<_>>()
-            })
-            .find(|m: &Vec<Option<usize>>| {
-                m.iter()
-                    .enumerate()
-                    .all(|(k, b)| b.is_some() || OPTIONAL_JOINTS.contains(&k))
-            })
-            .ok_or_else(|| {
-                format!(
-                    "skin {d}'s bones are not an SMPL 24 skeleton under any rig's names ({}): \
-                     not a dance dancegen wrote",
-                    Rig::ALL.map(Rig::name).join(", ")
-                )
-            })?;
+        let smpl = smpl_joints_by_name(&names, d)?;
         for (n, c) in &bones {
             let r = rotation(&c.bind_to_world);
             let off = (0..9)
@@ -170,6 +146,7 @@ mod tests {
     use super::*;
     use crate::fbx::{FbxOptions, fbx_bytes};
     use crate::gltf::DancerAnimation;
+    use crate::rig::Rig;
 
     /// A dancer turning every joint through large angles (several times round for the root,
     /// which the writer's Euler curves must unwrap) and travelling.

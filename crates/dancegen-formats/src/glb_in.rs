@@ -1,5 +1,5 @@
 //! Reading back the dances `.glb` files that dancegen writes ([`crate::gltf`]): each skin is a
-//! dancer whose joint nodes carry one of the rigs' SMPL 24 bone names ([`Rig::joint_names`],
+//! dancer whose joint nodes carry one of the rigs' SMPL 24 bone names ([`crate::rig::Rig::joint_names`],
 //! `dancer{d}/` prefixed in a scene of several), animated by one rotation channel per joint
 //! and a translation channel (the pelvis world position) on the root, with key times
 //! `frame / fps`. So `render`, `convert`, `eval`, `--leader`, `--edit` and `--continue-from` read
@@ -15,11 +15,7 @@ use dancegen_motion::rotation::Quat;
 use serde_json::Value;
 
 use crate::glb_container::split_glb;
-use crate::rig::Rig;
-
-/// SMPL joints that may be missing (the hands, 22 and 23: a holistic skeleton has fingers
-/// instead).
-const OPTIONAL_JOINTS: [usize; 2] = [22, 23];
+use crate::rig::smpl_joints_by_name;
 
 /// Most key frames read (an hour at 120 fps), so a length field cannot ask for gigabytes.
 const MAX_KEYS: usize = 120 * 3600;
@@ -92,26 +88,10 @@ pub fn read_dance_glb(path: &Path) -> Result<Vec<SmplMotion>, String> {
         };
         let names: Vec<String> = joints.iter().map(|&n| name_of(n)).collect();
         // SMPL joint k -> node index, in the first rig whose every body joint is there.
-        let smpl_nodes: Vec<Option<usize>> = Rig::ALL
-            .iter()
-            .map(|rig| {
-                rig.joint_names()
-                    .iter()
-                    .map(|want| names.iter().position(|n| n == want).map(|i| joints[i]))
-                    .collect::<Vec<_>>()
-            })
-            .find(|m: &Vec<Option<usize>>| {
-                m.iter()
-                    .enumerate()
-                    .all(|(k, n)| n.is_some() || OPTIONAL_JOINTS.contains(&k))
-            })
-            .ok_or_else(|| {
-                format!(
-                    "skin {d}'s bones are not an SMPL 24 skeleton under any rig's names ({}): \
-                     not a dance dancegen wrote",
-                    Rig::ALL.map(Rig::name).join(", ")
-                )
-            })?;
+        let smpl_nodes: Vec<Option<usize>> = smpl_joints_by_name(&names, d)?
+            .into_iter()
+            .map(|i| i.map(|i| joints[i]))
+            .collect();
         let root = smpl_nodes[0].expect("the pelvis is required");
         let &(times_at, trans_at) = translation
             .get(&root)
@@ -250,6 +230,7 @@ impl Doc<'_> {
 mod tests {
     use super::*;
     use crate::gltf::{DancerAnimation, GlbOptions, glb_bytes_multi};
+    use crate::rig::Rig;
     use dancegen_motion::rotation::Mat3;
 
     fn dancer(seed: f32, frames: usize) -> (Vec<f32>, Vec<f32>) {

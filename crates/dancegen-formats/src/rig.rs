@@ -192,6 +192,37 @@ impl std::fmt::Display for Rig {
     }
 }
 
+/// SMPL joints a dance file may lack when read back: the hands (22 and 23), where a holistic
+/// skeleton has fingers instead.
+const OPTIONAL_SMPL_JOINTS: [usize; 2] = [22, 23];
+
+/// For one skin's bone names (a `dancer{d}/` prefix already removed), each SMPL joint's
+/// index into `names`, under the first rig whose every body joint is there (the hands may be
+/// missing); the words for a skin that is no rig's, naming it `skin {skin}`. How the `.glb`
+/// and `.fbx` readers ([`crate::glb_in`], [`crate::fbx_in`]) find the dancers dancegen wrote.
+pub fn smpl_joints_by_name(names: &[String], skin: usize) -> Result<Vec<Option<usize>>, String> {
+    Rig::ALL
+        .iter()
+        .map(|rig| {
+            rig.joint_names()
+                .iter()
+                .map(|want| names.iter().position(|n| n == want))
+                .collect::<Vec<_>>()
+        })
+        .find(|m: &Vec<Option<usize>>| {
+            m.iter()
+                .enumerate()
+                .all(|(k, i)| i.is_some() || OPTIONAL_SMPL_JOINTS.contains(&k))
+        })
+        .ok_or_else(|| {
+            format!(
+                "skin {skin}'s bones are not an SMPL 24 skeleton under any rig's names ({}): \
+                 not a dance dancegen wrote",
+                Rig::ALL.map(Rig::name).join(", ")
+            )
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

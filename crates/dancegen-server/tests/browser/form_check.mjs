@@ -21,9 +21,8 @@
  */
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { collectErrors, launchChromium } from './chromium.mjs';
 
-const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
 // Generous: every check waits for a chooser that should open, and with the other server tests
 // generating dances on both cores, 3 s was once too short for the first one.
 const CHOOSER_MS = 15_000;
@@ -38,16 +37,11 @@ mkdirSync(outDir, { recursive: true });
 const errors = [];
 const result = { desktop: {}, phone: {}, errors };
 
-const browser = await puppeteer.launch({
-  executablePath: CHROMIUM,
-  headless: true,
-  args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
-});
+const browser = await launchChromium();
 let exitCode = 0;
 try {
   const open = async (page) => {
-    page.on('pageerror', (e) => errors.push(`page error: ${e.message}`));
-    page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
+    collectErrors(page, errors);
     await page.goto(`${base}/`, { waitUntil: 'networkidle0' });
     // The systems are loaded when the select is enabled.
     await page.waitForSelector('#system:not([disabled])', { timeout: 60_000 });

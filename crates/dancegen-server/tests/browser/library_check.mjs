@@ -21,9 +21,8 @@
  */
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { collectErrors, launchChromium } from './chromium.mjs';
 
-const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
 const STEP_TIMEOUT_MS = 30_000;
 
 const [baseArg, outDir] = process.argv.slice(2);
@@ -38,26 +37,17 @@ const requests = [];
 const errors = [];
 const dialogs = [];
 
-const browser = await puppeteer.launch({
-  executablePath: CHROMIUM,
-  headless: true,
-  args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
-});
+const browser = await launchChromium();
 
 let exitCode = 0;
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1100, height: 900 });
   page.on('request', (r) => requests.push(r.url()));
-  page.on('pageerror', (e) => errors.push(`pageerror: ${e?.message ?? e}`));
   // The deleted dance's page asks for it and is answered 404, as it should be: from then on
   // the browser's "Failed to load resource: … 404" lines are expected.
   let deletedOpen = false;
-  page.on('console', (m) => {
-    if (m.type() !== 'error') return;
-    if (deletedOpen && m.text().includes('status of 404')) return;
-    errors.push(`console: ${m.text()}`);
-  });
+  collectErrors(page, errors, (text) => deletedOpen && text.includes('status of 404'));
   page.on('response', (r) => { if (r.status() >= 400 && !r.url().includes('/api/jobs/')) errors.push(`HTTP ${r.status()} ${r.url()}`); });
   page.on('dialog', async (d) => {
     dialogs.push({ type: d.type(), message: d.message() });
