@@ -78,6 +78,10 @@ pub struct JobParams {
     /// ([`dancegen_generate::request::VideoSize`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub video_size: Option<String>,
+    /// Bone names of the `.glb`, `.fbx` and `.bvh`: `smpl` (the default), `mixamo`, `ue5` or
+    /// `vrm`, as `generate --rig` ([`dancegen_formats::rig::Rig`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<String>,
     /// A new version of a finished job's dance ([`EditParams`]); the song, system, dancers,
     /// start and end are that job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -93,7 +97,7 @@ pub const MAX_STEPS: usize = 1000;
 
 /// The fields `params` may have, for the error about an unknown one.
 const FIELDS: &str =
-    "system, dancers, seed, genre, steps, start, end, variations, mp4, video_size, edit";
+    "system, dancers, seed, genre, steps, start, end, variations, mp4, video_size, rig, edit";
 
 /// The parameters an edit takes from the job it edits, not from its own params.
 const FROM_THE_EDITED_JOB: [&str; 5] = ["system", "dancers", "genre", "start", "end"];
@@ -238,6 +242,11 @@ impl JobParams {
         if let Some(v) = &video_size {
             VideoSize::parse(v).map_err(|e| ApiError::field("video_size", e))?;
         }
+        let rig = opt_str(&obj, "rig")?;
+        if let Some(r) = &rig {
+            dancegen_formats::rig::Rig::from_name(r)
+                .map_err(|e| ApiError::field("rig", e.to_string()))?;
+        }
         let mp4 = match obj.get("mp4") {
             None | Some(Value::Null) => false,
             Some(Value::Bool(b)) => *b,
@@ -257,6 +266,7 @@ impl JobParams {
             variations,
             mp4,
             video_size,
+            rig,
             edit,
             song_title: None,
         })
@@ -270,6 +280,10 @@ impl JobParams {
         self.genre = edited.genre.clone();
         self.start = edited.start;
         self.song_title = edited.song_title.clone();
+        // Files named for the same tool as the dance it edits, unless asked otherwise.
+        if self.rig.is_none() {
+            self.rig = edited.rig.clone();
+        }
         if !self.edit.as_ref().is_some_and(|e| e.extend) {
             self.end = edited.end;
         }
@@ -483,6 +497,15 @@ mod tests {
         assert!(e.to_string().contains("choose 640x480 or 1280x720"), "{e}");
         let p = JobParams::parse(r#"{"mp4":true,"video_size":"1280x720"}"#, 4).unwrap();
         assert_eq!(p.video_size.as_deref(), Some("1280x720"));
+        let e = err(r#"{"rig":"maya"}"#);
+        assert_eq!(e.field.as_deref(), Some("rig"));
+        assert!(
+            e.message.contains("smpl, mixamo, ue5 or vrm"),
+            "{}",
+            e.message
+        );
+        let p = JobParams::parse(r#"{"rig":"ue5"}"#, 4).unwrap();
+        assert_eq!(p.rig.as_deref(), Some("ue5"));
         assert_eq!(
             err(r#"{"system":"duet","genre":"salsa"}"#).field.as_deref(),
             Some("genre")

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use dancegen_formats::rig::Rig;
 use dancegen_generate::progress::stage::WRITE_OUTPUTS;
 use dancegen_generate::request::{CommonOptions, DancerSelection, OutputRequest, VideoSize};
 use dancegen_generate::systems::duet::{DuetOptions, load_leader};
@@ -176,9 +177,18 @@ fn generate(
             return Err(GenerateError::Cancelled);
         }
         let stem = variation_stem(k);
+        // Checked when the job was made; an unreadable value in an old row is SMPL's names.
+        let rig = p
+            .rig
+            .as_deref()
+            .and_then(|r| Rig::from_name(r).ok())
+            .unwrap_or_default();
         let mut outputs: Vec<OutputRequest> = MOTION_FORMATS
             .iter()
-            .map(|ext| OutputRequest::new(dir.join(format!("{stem}.{ext}"))))
+            .map(|ext| OutputRequest {
+                rig,
+                ..OutputRequest::new(dir.join(format!("{stem}.{ext}")))
+            })
             .collect();
         if p.mp4 {
             // Checked when the job was made; an unreadable value in an old row is 640x480.

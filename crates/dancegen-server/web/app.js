@@ -376,6 +376,7 @@ function readParams() {
   params.variations = number('variations', { integer: true, min: 1, max: 4, label: 'Variations' }) ?? 1;
   params.mp4 = $('mp4').checked;
   if (params.mp4) params.video_size = $('video-size').value;
+  if ($('rig').value !== 'smpl') params.rig = $('rig').value;
   return { params, song, leader };
 }
 

@@ -948,3 +948,36 @@ fn the_library_lists_names_and_makes_a_dance_again() {
     let after = s.get("/api/jobs");
     assert_eq!(after.json["jobs"].as_array().unwrap().len(), 1);
 }
+
+/// The rig choice (issue 45): a job asked with `"rig": "mixamo"` names the bones of its
+/// `.bvh`, `.fbx` and `.glb` as Mixamo does, and an unknown rig is refused naming the choices.
+#[test]
+fn a_job_names_its_bones_for_the_chosen_rig() {
+    let s = start(Limits::default());
+    let bad = s.submit_song(&demo_song(), r#"{"rig": "maya"}"#);
+    assert_eq!(
+        (bad.status, bad.json["field"].as_str()),
+        (400, Some("rig")),
+        "{}",
+        bad.json
+    );
+    assert!(
+        bad.json["error"].as_str().unwrap().contains("mixamo"),
+        "{}",
+        bad.json
+    );
+    let r = s.submit_song(&demo_song(), r#"{"seed": 1, "end": 4, "rig": "mixamo"}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap();
+    let job = s.wait(id, Duration::from_secs(600));
+    assert_eq!(job["state"], "done", "{job}");
+    assert_eq!(job["params"]["rig"], "mixamo");
+    let files = &job["variations"][0]["files"];
+    let has_hips = |kind: &str| {
+        let bytes = s.download(files[kind].as_str().unwrap());
+        bytes.windows(14).any(|w| w == b"mixamorig:Hips")
+    };
+    for kind in ["bvh", "fbx", "glb"] {
+        assert!(has_hips(kind), "the .{kind} has no bone mixamorig:Hips");
+    }
+}
