@@ -83,6 +83,7 @@ window.__viewer = {
   joints: (v = 0) => openViewer().joints(v),
   figures: (v = 0) => openViewer().figures(v),
   timeline: () => openViewer().timelineInfo(),
+  camera: () => openViewer().cameraInfo(),
   audio: () => openViewer().audio,
   play: () => openViewer().play(),
   count: () => openViewer().count,

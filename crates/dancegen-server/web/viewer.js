@@ -35,6 +35,13 @@ const SEEK_TIMEOUT_MS = 10000;
 
 /** Camera field of view, degrees. */
 const FOV = 40;
+/** SMPL joint indices (the skin's joint order, also SMPL-H's body): chest, head, left wrist;
+ * a holistic skeleton's fingers come after the wrists. */
+const CHEST_JOINT = 9;
+/** The close-up frames at least this much (metres a side): a face and two hands. */
+const CLOSEUP_LEAST = 0.35;
+const HEAD_JOINT = 15;
+const LEFT_WRIST_JOINT = 20;
 /** Head sphere radius and its centre above the head joint (the base of the skull), metres. */
 const HEAD_RADIUS = 0.1;
 const HEAD_LIFT = 0.09;
@@ -273,12 +280,15 @@ class Stage {
   addHeadsAndShadows() {
     const texture = shadowTexture();
     this.heads = [];
+    // A holistic dance brings its own head: a face mesh with the 52 ARKit morph targets.
+    this.face = null;
+    this.root.traverse((o) => { if (o.isMesh && o.morphTargetDictionary && !this.face) this.face = o; });
     this.shadows = this.dancers.map((bones, d) => {
       const body = this.bodyOf(d);
       // The head bone under any rig's name (three.js drops the '/' of `dancer{d}/head` and
       // the ':' of `mixamorig:Head`).
       const head = bones.find((b) => /head$/i.test(b.name ?? ''));
-      if (head && body) {
+      if (head && body && !this.face) {
         const sphere = new THREE.Mesh(new THREE.SphereGeometry(HEAD_RADIUS, 24, 16), body.material);
         sphere.position.set(0, HEAD_LIFT, 0);
         sphere.name = 'head-sphere';
@@ -389,9 +399,12 @@ class Stage {
     return box;
   }
 
-  /** Places the camera for a preset so that `box` fills the view, a little from above. */
-  setView(view, box) {
-    const size = box.getSize(new THREE.Vector3()).max(new THREE.Vector3(0.8, 0.8, 0.8));
+  /**
+   * Places the camera for a preset so that `box` fills the view, a little from above; a box
+   * smaller than `least` metres a side is framed as that large.
+   */
+  setView(view, box, least = 0.8) {
+    const size = box.getSize(new THREE.Vector3()).max(new THREE.Vector3(least, least, least));
     const target = box.getCenter(new THREE.Vector3());
     // Across and up the picture, and along the line of sight, for each preset.
     const [across, up, depth] = { side: [size.z, size.y, size.x], top: [size.x, size.z, size.y] }[view]
@@ -409,6 +422,32 @@ class Stage {
     this.controls.target.copy(target);
     this.camera.position.copy(target).add(offset);
     this.camera.lookAt(target);
+    this.controls.update();
+  }
+
+  /**
+   * The first dancer's head and hands now (head joint, wrists and every finger bone, and the
+   * face mesh), a little enlarged: what the close-up frames.
+   */
+  closeupBox() {
+    const bones = this.dancers[0];
+    const box = new THREE.Box3();
+    const p = new THREE.Vector3();
+    this.root.updateMatrixWorld(true);
+    bones.forEach((b, j) => {
+      if (j === CHEST_JOINT || j === HEAD_JOINT || j >= LEFT_WRIST_JOINT) box.expandByPoint(b.getWorldPosition(p));
+    });
+    if (this.face) box.expandByObject(this.face);
+    return box.expandByScalar(0.08);
+  }
+
+  /** Moves camera and target together so the target sits on the first dancer's chest. */
+  followChest() {
+    const c = this.dancers[0][CHEST_JOINT].getWorldPosition(new THREE.Vector3());
+    const delta = c.sub(this.controls.target);
+    if (delta.lengthSq() < 1e-12) return;
+    this.controls.target.add(delta);
+    this.camera.position.add(delta);
     this.controls.update();
   }
 
@@ -470,6 +509,9 @@ export class Viewer {
       waveform: root.querySelector('#waveform'),
     };
     this.timelineUrl = job.timeline ?? null;
+    // The close-up on the head and hands is for a dance with fingers and a face.
+    const closeup = root.querySelector('.view[data-view="closeup"]');
+    if (closeup) closeup.hidden = job.params?.system !== 'holistic';
     this.timeline = null;
     this.audio = document.createElement('audio');
     this.audio.preload = 'auto';
@@ -595,9 +637,13 @@ export class Viewer {
     const moved = t !== this.lastTime;
     if (!(moved || this.dirty || force)) return;
     for (const s of this.stages) s.pose(t);
-    if (this.following) {
+    if (this.following || this.view === 'closeup') {
       this.syncing = true;
-      for (const s of this.stages) { s.root.updateMatrixWorld(true); s.follow(); }
+      for (const s of this.stages) {
+        s.root.updateMatrixWorld(true);
+        if (this.view === 'closeup') s.followChest();
+        else s.follow();
+      }
       this.syncing = false;
     }
     for (const s of this.stages) s.frame();
@@ -666,6 +712,25 @@ export class Viewer {
       g.fillRect(x, 0, Math.max(1, dpr), 3 * dpr);
       g.fillRect(x, h - 3 * dpr, Math.max(1, dpr), 3 * dpr);
     }
+  }
+
+  /**
+   * The first variation's camera against the first dancer's head (the browser test reads it
+   * after choosing a view): distance, whether the head is in the picture, whether the file has
+   * a face and whether a head sphere was added.
+   */
+  cameraInfo() {
+    const s = this.stages[0];
+    s.scene.updateMatrixWorld(true);
+    const head = s.dancers[0][HEAD_JOINT].getWorldPosition(new THREE.Vector3());
+    const ndc = head.clone().project(s.camera);
+    return {
+      view: this.view,
+      distance: s.camera.position.distanceTo(head),
+      headInView: Math.abs(ndc.x) < 1 && Math.abs(ndc.y) < 1 && ndc.z < 1,
+      face: Boolean(s.face),
+      headSpheres: s.heads?.length ?? 0,
+    };
   }
 
   /** What the timeline shows (the browser test reads it). */
@@ -749,11 +814,16 @@ export class Viewer {
       this.following = false;
       this.view = view;
       this.syncing = true;
-      for (const s of this.stages) s.setView(view, s.bounds);
+      // The close-up frames the head and hands from the front and then follows the chest.
+      for (const s of this.stages) {
+        if (view === 'closeup') s.setView('front', s.closeupBox(), CLOSEUP_LEAST);
+        else s.setView(view, s.bounds);
+      }
       this.syncing = false;
     }
     for (const b of this.root.querySelectorAll('.view')) {
-      b.setAttribute('aria-pressed', String(b.dataset.view === 'follow' ? this.following : false));
+      const on = b.dataset.view === 'follow' ? this.following : b.dataset.view === 'closeup' && this.view === 'closeup';
+      b.setAttribute('aria-pressed', String(on));
     }
     this.dirty = true;
   }

@@ -13,6 +13,8 @@
  *    "seeked": {"1": {"audio": s, "dance": s}, ...},
  *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
  *    "timeline": {shown, beats, peaks, firstBeat, lastBeat, duration, inked (painted pixels)},
+ *    "views": {front: camera, closeupShown, closeup: camera (holistic)}, where camera is
+ *              {view, distance to the head, headInView, face, headSpheres},
  *    "figures": [per variation at 1 s: {heads: [[x,y,z]], shadows: [{at, radius, opacity}],
  *                pelvis: [[x,y,z]], lowest: [y], legend: [text]}],
  *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
@@ -125,6 +127,21 @@ try {
         return Array.from({ length: v.count() }, (_, i) => v.figures(i));
       }, SEEK_TIMES[0]));
       result.timeline = await page.evaluate(() => window.__viewer.timeline());
+    });
+    // The camera presets: Front, and the holistic close-up where it is offered.
+    await step('views', async () => {
+      const v = {};
+      await page.click('.view[data-view="front"]');
+      v.front = await page.evaluate(() => window.__viewer.camera());
+      v.closeupShown = await page.$eval('.view[data-view="closeup"]', (b) => !b.hidden);
+      if (v.closeupShown) {
+        await page.click('.view[data-view="closeup"]');
+        await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+        v.closeup = await page.evaluate(() => window.__viewer.camera());
+        await (await page.$('#viewer')).screenshot({ path: join(outDir, 'closeup.png') });
+        await page.click('.view[data-view="front"]');
+      }
+      result.views = v;
     });
     const viewerBox = await page.$('#viewer');
     for (const t of SHOT_TIMES) {

@@ -332,6 +332,10 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         check_controls(&report, name);
         check_figures(&report, name, if name == "duet" { 2 } else { 1 });
         check_timeline(&report, &job, name);
+        assert_eq!(
+            report["views"]["closeupShown"], false,
+            "{name}: the close-up is for holistic dances"
+        );
         // The glb's dancers in order: a duet's leader (dancer 0), then the follower.
         let mut expected = Vec::new();
         if name == "duet" {
@@ -608,4 +612,39 @@ fn my_dances_lists_renames_and_deletes_dances() {
         "{unknown}"
     );
     assert_eq!(unknown["link"], "./#library", "{unknown}");
+}
+
+/// A holistic dance in the viewer (issue 45): its own face (the head mesh with the 52 ARKit
+/// morph targets) instead of a head sphere, and a Close-up view, offered only to it, that
+/// brings the camera to under half the front view's distance from the head, which stays in
+/// the picture.
+#[test]
+fn a_holistic_dance_has_a_close_up_on_the_face_and_hands() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let r = s.submit_song(
+        &demo_song(),
+        r#"{"system": "holistic", "seed": 1, "end": 6}"#,
+    );
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap();
+    let job = s.wait(id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    let report = view(&s, id, "holistic");
+    assert_eq!(report["errors"], serde_json::json!([]), "{report}");
+    let v = &report["views"];
+    assert_eq!(v["closeupShown"], true, "{v}");
+    let (front, close) = (&v["front"], &v["closeup"]);
+    assert_eq!(front["face"], true, "the file's face: {v}");
+    assert_eq!(front["headSpheres"], 0, "no sphere over the face: {v}");
+    assert_eq!(close["view"], "closeup", "{v}");
+    assert_eq!(close["headInView"], true, "{v}");
+    let (df, dc) = (
+        front["distance"].as_f64().unwrap(),
+        close["distance"].as_f64().unwrap(),
+    );
+    assert!(
+        dc < df / 2.0,
+        "close-up at {dc:.2} m, front at {df:.2} m: {v}"
+    );
 }
