@@ -148,16 +148,10 @@ mod tests {
     use crate::gltf::DancerAnimation;
     use crate::rig::Rig;
 
-    /// A dancer turning every joint through large angles (several times round for the root,
-    /// which the writer's Euler curves must unwrap) and travelling.
+    /// Every joint through large angles (several times round for the root, which the
+    /// writer's Euler curves must unwrap), travelling.
     fn dancer(seed: f32, frames: usize) -> (Vec<f32>, Vec<f32>) {
-        let rot: Vec<f32> = (0..frames * POSE_DIMS)
-            .map(|i| 2.5 * ((i as f32 * 0.61 + seed).sin()))
-            .collect();
-        let trans: Vec<f32> = (0..frames * 3)
-            .map(|i| seed + (i as f32 * 0.05).sin())
-            .collect();
-        (rot, trans)
+        crate::test_dancers::turning_dancer(seed, frames, 2.5)
     }
 
     fn rotation_error(got: &[f32], want: &[f32]) -> f64 {

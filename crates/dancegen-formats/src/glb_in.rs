@@ -234,13 +234,7 @@ mod tests {
     use dancegen_motion::rotation::Mat3;
 
     fn dancer(seed: f32, frames: usize) -> (Vec<f32>, Vec<f32>) {
-        let rot: Vec<f32> = (0..frames * POSE_DIMS)
-            .map(|i| 0.9 * ((i as f32 * 0.37 + seed).sin()))
-            .collect();
-        let trans: Vec<f32> = (0..frames * 3)
-            .map(|i| (i as f32 * 0.01 + seed).cos())
-            .collect();
-        (rot, trans)
+        crate::test_dancers::turning_dancer(seed, frames, 0.9)
     }
 
     #[test]

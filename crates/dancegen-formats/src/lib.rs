@@ -23,3 +23,5 @@ pub mod retarget;
 pub mod rig;
 pub mod scene_input;
 pub mod smpl_npz;
+#[cfg(test)]
+mod test_dancers;

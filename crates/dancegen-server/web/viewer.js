@@ -38,10 +38,10 @@ const FOV = 40;
 /** SMPL joint indices (the skin's joint order, also SMPL-H's body): chest, head, left wrist;
  * a holistic skeleton's fingers come after the wrists. */
 const CHEST_JOINT = 9;
-/** The close-up frames at least this much (metres a side): a face and two hands. */
-const CLOSEUP_LEAST = 0.35;
 const HEAD_JOINT = 15;
 const LEFT_WRIST_JOINT = 20;
+/** The close-up frames at least this much (metres a side): a face and two hands. */
+const CLOSEUP_LEAST = 0.35;
 /** Head sphere radius and its centre above the head joint (the base of the skull), metres. */
 const HEAD_RADIUS = 0.1;
 const HEAD_LIFT = 0.09;
