@@ -557,6 +557,14 @@ fn add_face(
         "type": "VEC3"}),
     );
     let nrm_acc = p.accessors.len() - 1;
+    let cv = p
+        .bin
+        .view(p.views, &f32_bytes(&mesh.colors), Some(ARRAY_BUFFER));
+    p.accessors.push(
+        json!({"bufferView": cv, "componentType": FLOAT, "count": count,
+        "type": "VEC3"}),
+    );
+    let color_acc = p.accessors.len() - 1;
     let idx: Vec<u8> = mesh
         .indices
         .iter()
@@ -579,11 +587,14 @@ fn add_face(
         );
         targets.push(json!({"POSITION": p.accessors.len() - 1}));
     }
+    // The skin and the painted eyes, brows and lips are the vertex colours (COLOR_0, which
+    // glTF multiplies with the base colour).
     p.materials
         .push(json!({"name": "face", "pbrMetallicRoughness": {
-        "baseColorFactor": [0.85, 0.7, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.7}}));
+        "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.7}}));
     p.meshes.push(json!({"name": "face", "primitives": [{
-        "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc}, "indices": index_acc,
+        "attributes": {"POSITION": pos_acc, "NORMAL": nrm_acc, "COLOR_0": color_acc},
+        "indices": index_acc,
         "material": p.materials.len() - 1, "mode": 4, "targets": targets}],
         "weights": vec![0.0; ARKIT_COUNT],
         "extras": {"targetNames": ARKIT_NAMES.to_vec()}}));

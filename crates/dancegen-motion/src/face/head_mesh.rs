@@ -29,6 +29,10 @@ pub struct HeadMesh {
     pub indices: Vec<u32>,
     /// Per blendshape (ARKit order), `V×3` displacements at weight 1.
     pub targets: Vec<Vec<f32>>,
+    /// `V×3` linear RGB: skin, with dark eyes and brows and red lips painted where the
+    /// blendshapes move them, so a viewer can see the expressions (the bare shape's bumps
+    /// do not show at viewing distance).
+    pub colors: Vec<f32>,
 }
 
 /// A face feature: a point on the front of the head (x, y relative to the centre; it is
@@ -47,6 +51,16 @@ const fn bump(x: f64, y: f64, sigma: f64, delta: [f64; 3]) -> Bump {
         delta,
     }
 }
+
+/// Vertex colours (linear RGB): skin, and the painted features with their half-widths (x, y)
+/// on the face, metres.
+const SKIN: [f32; 3] = [0.85, 0.7, 0.6];
+const EYE_COLOR: [f32; 3] = [0.03, 0.025, 0.02];
+const BROW_COLOR: [f32; 3] = [0.08, 0.05, 0.03];
+const LIP_COLOR: [f32; 3] = [0.45, 0.06, 0.06];
+const EYE_SIZE: [f64; 2] = [0.011, 0.008];
+const BROW_SIZE: [f64; 2] = [0.016, 0.005];
+const LIP_SIZE: [f64; 2] = [0.026, 0.009];
 
 /// Feature positions on the face (x = dancer's left, y = up, relative to the head centre).
 const EYE: [f64; 2] = [0.032, 0.02];
@@ -199,18 +213,76 @@ pub fn build_head_mesh() -> HeadMesh {
             d
         })
         .collect();
+    let colors = (0..n).flat_map(|k| vertex_color(vertex(k))).collect();
     HeadMesh {
         positions,
         normals,
         indices,
         targets,
+        colors,
     }
+}
+
+/// The colour of the vertex at `v`: a feature's where `v` is on the front of the head within
+/// the feature's oval (both eyes and brows, the lips), blended into the skin at its rim.
+fn vertex_color(v: [f64; 3]) -> [f32; 3] {
+    if v[2] - CENTRE[2] <= 0.0 {
+        return SKIN;
+    }
+    let (x, y) = (v[0] - CENTRE[0], v[1] - CENTRE[1]);
+    let features = [
+        (EYE, EYE_SIZE, EYE_COLOR),
+        (BROW, BROW_SIZE, BROW_COLOR),
+        (MOUTH, LIP_SIZE, LIP_COLOR),
+    ];
+    let mut color = SKIN;
+    for (at, size, paint) in features {
+        // Both sides: the features are symmetric (the mouth is on the centre line).
+        let dx = x.abs() - at[0];
+        let d = ((dx / size[0]).powi(2) + ((y - at[1]) / size[1]).powi(2)).sqrt();
+        // 1 inside the oval, fading to 0 at 1.5 times its size.
+        let w = ((1.5 - d) / 0.5).clamp(0.0, 1.0) as f32;
+        for c in 0..3 {
+            color[c] += w * (paint[c] - color[c]);
+        }
+    }
+    color
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::face::arkit::arkit_index;
+
+    /// The painted features are where the blendshapes that move them act: the vertices
+    /// `eyeBlinkLeft` moves most are dark, those `jawOpen` moves most around the mouth are red,
+    /// the back of the head is skin.
+    #[test]
+    fn eyes_and_lips_are_painted_where_their_blendshapes_move() {
+        let h = build_head_mesh();
+        let n = h.positions.len() / 3;
+        assert_eq!(h.colors.len(), n * 3);
+        let color = |k: usize| [h.colors[k * 3], h.colors[k * 3 + 1], h.colors[k * 3 + 2]];
+        let most_moved = |name: &str| {
+            let t = &h.targets[arkit_index(name).unwrap()];
+            (0..n)
+                .max_by(|&a, &b| {
+                    let m =
+                        |k: usize| t[k * 3].powi(2) + t[k * 3 + 1].powi(2) + t[k * 3 + 2].powi(2);
+                    m(a).total_cmp(&m(b))
+                })
+                .unwrap()
+        };
+        let eye = color(most_moved("eyeBlinkLeft"));
+        assert!(eye.iter().all(|&c| c < 0.2), "the blinking eye is {eye:?}");
+        let lip = color(most_moved("mouthPucker"));
+        assert!(
+            lip[0] > 2.0 * lip[1] && lip[1] < 0.3,
+            "the pursed lips are {lip:?}"
+        );
+        let back = (0..n).find(|&k| h.positions[k * 3 + 2] < -0.05).unwrap();
+        assert_eq!(color(back), SKIN);
+    }
 
     #[test]
     fn every_blendshape_moves_the_face_and_sides_mirror() {
