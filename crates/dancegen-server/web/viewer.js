@@ -801,8 +801,6 @@ export class Viewer {
       shadows: (s.shadows ?? []).map((m) => ({ at: [m.position.x, m.position.y, m.position.z], radius: m.scale.x, opacity: m.material.opacity })),
       pelvis: s.dancers.map((bones) => bones[0].getWorldPosition(p).toArray()),
       lowest: s.dancers.map((bones) => Math.min(...bones.map((b) => b.getWorldPosition(p).y))),
-      lowestAt: s.dancers.map((bones) => bones.map((b) => b.getWorldPosition(new THREE.Vector3()))
-        .reduce((a, q) => (q.y < a.y ? q : a)).toArray()),
       legend: [...s.canvasBox.querySelectorAll('.legend li')].map((li) => li.textContent),
     };
   }
