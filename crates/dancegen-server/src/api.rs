@@ -321,7 +321,7 @@ async fn rename(
     s.jobs.view(&id)?.map(Json).ok_or_else(|| no_job(&id))
 }
 
-#[derive(serde::Deserialize, Default)]
+#[derive(serde::Deserialize)]
 struct Again {
     seed: Option<u64>,
 }
@@ -331,9 +331,21 @@ struct Again {
 async fn again(
     State(s): State<AppState>,
     Path(id): Path<String>,
-    body: Option<Json<Again>>,
+    body: axum::body::Bytes,
 ) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
-    let seed = body.map(|Json(b)| b).unwrap_or_default().seed;
+    // No body, or JSON `{"seed": N}`; anything else is said in words.
+    let seed = if body.iter().all(u8::is_ascii_whitespace) {
+        None
+    } else {
+        serde_json::from_slice::<Again>(&body)
+            .map_err(|e| {
+                ApiError::field(
+                    "seed",
+                    format!("send JSON {{\"seed\": N}} with N a whole number from 0 ({e})"),
+                )
+            })?
+            .seed
+    };
     if !files::valid_id(&id) {
         return Err(no_job(&id));
     }

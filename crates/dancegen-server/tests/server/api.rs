@@ -943,6 +943,13 @@ fn the_library_lists_names_and_makes_a_dance_again() {
             .status,
         404
     );
+    let bad_seed = s.send_json("POST", &format!("/api/jobs/{id}/again"), r#"{"seed": -1}"#);
+    assert_eq!(
+        (bad_seed.status, bad_seed.json["field"].as_str()),
+        (400, Some("seed")),
+        "{}",
+        bad_seed.json
+    );
     // Deleted, it leaves the library.
     assert_eq!(s.delete(&format!("/api/jobs/{id}")).status, 204);
     let after = s.get("/api/jobs");
