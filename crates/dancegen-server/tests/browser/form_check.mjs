@@ -56,6 +56,10 @@ try {
   const desk = await browser.newPage();
   await desk.setViewport({ width: 1280, height: 900 });
   await open(desk);
+  // waitForFileChooser turns interception on without waiting for the browser's answer, so the
+  // first key press can beat it and the chooser opens unseen (puppeteer issue #6040; CI lost
+  // the Enter check that way once). Turn it on here, awaited; it then stays on for the page.
+  await desk._client().send('Page.setInterceptFileChooserDialog', { enabled: true });
   // Tab from the page's start until the drop zone has the focus (at most 10 stops).
   for (let i = 0; i < 10; i++) {
     await desk.keyboard.press('Tab');
