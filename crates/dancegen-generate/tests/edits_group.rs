@@ -259,10 +259,6 @@ fn every_dancer_reaches_a_keyframe_where_it_stands() {
 /// mean over seeds: one 6 s range is a lottery of its few beats). The same range of plain
 /// dances of those seeds is reported beside it.
 #[test]
-#[ignore = "unmet (issue 44) for dancer 1: over seeds 1-5 the new parts, each warped onto the \
-            beat with the kept frames around it fixed, have a mean BAS of 0.326, 0.241 and \
-            0.267 against 0.355, 0.352 and 0.296 for the whole dances (0.081, 0.207 and 0.191 \
-            unwarped); dancer 1's warp (±15 %, ends fixed) cannot reach its whole dance's"]
 fn new_parts_are_on_the_beat_over_seeds() {
     let original = base();
     let beats = feelings_beats(30.0, 54.0);

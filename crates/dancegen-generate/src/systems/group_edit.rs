@@ -9,8 +9,11 @@
 //! a formation places), the floor and the separation move only made frames (faded in from
 //! the kept ones), and the known values are spliced back exactly. The frames made anew are
 //! warped onto the beat as a plain group dance is, each run with the kept frames around it
-//! fixed ([`crate::beat_align::align_made_runs_to_beats`]; `--no-beat-align`). `--unison` is refused: it
-//! would replace the kept dancers' own moves.
+//! fixed ([`crate::beat_align::align_made_runs_to_beats`]; `--no-beat-align`), after the floor
+//! has moved them: the floor's per-frame root heights change the joint speeds whose minima are
+//! the beats the warp places. Warped before it, a new part's beats moved again (feelings.ogg
+//! 38-44 s, seeds 1-5: dancer 1's new parts BAS 0.241, 0.330 warped after the floor).
+//! `--unison` is refused: it would replace the kept dancers' own moves.
 
 use dancegen_lodgepp::inpaint::{FootLock, KnownFrames, join_made_runs};
 use dancegen_motion::repr::{Edge151, SmplMotion};
@@ -119,16 +122,17 @@ pub(super) fn edit(
         largest_join = largest_join.max(largest);
         let mut m =
             Edge151::decode(&joined).map_err(|e| GenerateError::Generation(e.to_string()))?;
+        let made: Vec<bool> = parts[k].root_height.iter().map(|&h| !h).collect();
+        floor_made_frames(&mut m, &made)?;
+        lift_made_frames_above_floor(&mut m, &made).map_err(GenerateError::Generation)?;
         if opts.beat_align {
             let untouched: Vec<bool> = (0..frames).map(|f| !parts[k].touched(f)).collect();
             let (aligned, reports) = align_made_runs_to_beats(&m, &untouched, &beats)
                 .map_err(GenerateError::Generation)?;
             m = aligned;
             aligned_runs.extend(reports);
+            lift_made_frames_above_floor(&mut m, &made).map_err(GenerateError::Generation)?;
         }
-        let made: Vec<bool> = parts[k].root_height.iter().map(|&h| !h).collect();
-        floor_made_frames(&mut m, &made)?;
-        lift_made_frames_above_floor(&mut m, &made).map_err(GenerateError::Generation)?;
         let free: Vec<bool> = parts[k].root_horizontal.iter().map(|&h| !h).collect();
         moves.push(fade_from_kept(&free));
         dancers.push(m);
