@@ -19,7 +19,8 @@
 //!
 //! The animation has one LINEAR rotation channel per bone whose local rotation moves, a
 //! translation channel on the hips and on detached (IK-style) bones, and key times
-//! `frame / fps` as `f32`. The JSON is written by `serde_json` from the parsed document, so the
+//! `frame / fps` as `f32`; its `extras` name the node each SMPL joint drives
+//! ([`SMPL_NODES_EXTRA`]). The JSON is written by `serde_json` from the parsed document, so the
 //! same inputs give the same bytes.
 
 use std::collections::BTreeSet;
@@ -35,6 +36,12 @@ use dancegen_formats::glb_container::assemble_glb;
 
 /// Name of the written animation (Blender shows it as the action name).
 pub const ANIMATION_NAME: &str = "dance";
+
+/// The animation's `extras` key listing, for each SMPL 24 joint in order, the node it drives
+/// (`null` where the character has no bone for it): how a viewer finds the dancer's chest,
+/// head and hands in a character whose bones it cannot know by name (the web viewer frames
+/// and follows with them). Tools ignore `extras`.
+pub const SMPL_NODES_EXTRA: &str = "dancegen_smpl_nodes";
 
 /// Extensions that reference no accessor or bufferView, or whose references are renumbered
 /// here (`KHR_draco_mesh_compression`, `EXT_mesh_gpu_instancing`). Any `KHR_materials_*`
@@ -268,9 +275,16 @@ pub fn glb_bytes(
 
     root.insert("accessors".into(), Value::Array(accessors));
     root.insert("bufferViews".into(), Value::Array(views));
+    let smpl_nodes: Vec<Option<usize>> =
+        (0..24).map(|j| character.bone_map().node_for(j)).collect();
     root.insert(
         "animations".into(),
-        json!([{"name": ANIMATION_NAME, "samplers": samplers, "channels": channels}]),
+        json!([{
+            "name": ANIMATION_NAME,
+            "samplers": samplers,
+            "channels": channels,
+            "extras": {SMPL_NODES_EXTRA: smpl_nodes},
+        }]),
     );
     bin.align();
     root.insert("buffers".into(), json!([{"byteLength": bin.data.len()}]));

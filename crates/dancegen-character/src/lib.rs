@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 
 pub use bone_map::{Aim, BoneMap, Convention, MappedBone, Site};
 pub use error::CharacterError;
-pub use glb_out::{ANIMATION_NAME, KNOWN_EXTENSIONS, glb_bytes, write_glb};
+pub use glb_out::{ANIMATION_NAME, KNOWN_EXTENSIONS, SMPL_NODES_EXTRA, glb_bytes, write_glb};
 pub use names::{NameTable, Part, Side, classify, smpl_official_name};
 pub use retarget::{FLOOR_PERCENTILE, NodeChannel, RetargetedAnimation, retarget};
 pub use scene::NodeTree;
@@ -71,6 +71,19 @@ impl Character {
         let path = path.as_ref();
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let asset = gltf_in::parse_gltf(path, bytes, Some(&base))?;
+        Character::from_asset(path, asset)
+    }
+
+    /// Like [`Character::from_bytes`], but reads nothing outside `bytes`: a buffer or image
+    /// given as a file name is an error. For a file someone else sent (a server's upload),
+    /// whose URIs could otherwise name any file on the server's disk (`../../etc/passwd`)
+    /// and bring it into a download.
+    pub fn from_self_contained_bytes(
+        path: impl AsRef<Path>,
+        bytes: &[u8],
+    ) -> Result<Character, CharacterError> {
+        let path = path.as_ref();
+        let asset = gltf_in::parse_gltf(path, bytes, None)?;
         Character::from_asset(path, asset)
     }
 

@@ -24,7 +24,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use dancegen_character::{
-    self as character, Character, CharacterError, Convention, RetargetedAnimation, Site,
+    self as character, Character, CharacterError, Convention, RetargetedAnimation,
+    SMPL_NODES_EXTRA, Site,
 };
 use dancegen_formats::aistpp::load_motion;
 use dancegen_formats::gltf::DancerAnimation;
@@ -1010,6 +1011,21 @@ fn robot_expressive_dances() {
         &d,
     );
     eprint!("{}", ch.describe_bone_map());
+    // The animation names the node each SMPL joint drives, for viewers (the web app's frames
+    // the robot's head and chest with it).
+    let glb = parse_glb(&std::fs::read(&out).unwrap());
+    let listed = glb.dance()["extras"][SMPL_NODES_EXTRA]
+        .as_array()
+        .expect("the SMPL nodes in the animation's extras")
+        .iter()
+        .map(Value::as_u64)
+        .collect::<Vec<_>>();
+    let want: Vec<Option<u64>> = (0..24)
+        .map(|j| ch.bone_map().node_for(j).map(|k| k as u64))
+        .collect();
+    assert_eq!(listed, want);
+    let name = |j: usize| glb.doc["nodes"][listed[j].unwrap() as usize]["name"].clone();
+    assert_eq!((name(0), name(15)), ("Body".into(), "Head".into()));
     if let Some(keep) = std::env::var_os("DANCEGEN_TEST_KEEP") {
         // For looking at the result: the robot dancing and the dance on dancegen's own figure.
         let keep = Path::new(&keep);

@@ -1,6 +1,6 @@
 //! The HTTP API: routes, handlers and the limits around them.
 //!
-//! - `POST /api/jobs` (multipart `song`, `leader`, `params`) → `202 {"id"}`
+//! - `POST /api/jobs` (multipart `song`, `leader`, `character`, `params`) → `202 {"id"}`
 //! - `GET /api/jobs/{id}` → the job object ([`crate::job::JobView`])
 //! - `GET /api/jobs/{id}/events` → Server-Sent Events, the job object on every change
 //! - `GET /api/jobs/{id}/files/{name}` → a job file, with HTTP Range (the viewer seeks the song)
@@ -8,7 +8,7 @@
 //! - `GET /api/jobs` → `{"jobs": [...]}`, the library: the newest jobs' objects, newest first
 //! - `PATCH /api/jobs/{id}` (JSON `{"name"}`) → names the dance in the library
 //! - `POST /api/jobs/{id}/again` (JSON `{"seed"}`, optional) → `202 {"id"}`: a new job with the
-//!   job's song, leader and settings
+//!   job's song, leader, character and settings
 //! - `GET /api/systems` → the systems, their genres and the limits
 //! - anything else → the embedded viewer ([`crate::web`])
 
@@ -177,6 +177,10 @@ async fn submit(
                 .song
                 .as_ref()
                 .map(|f| download_names::song_title(&f.name)),
+            character: up
+                .character
+                .as_ref()
+                .map(|c| upload::character_file_name(&c.name)),
             ..up.params.clone()
         },
     };
@@ -206,6 +210,8 @@ async fn submit(
     };
     let song_bytes: Option<Arc<[u8]>> = up.song.map(|f| Arc::from(f.bytes));
     let leader_bytes = up.leader.map(|l| l.bytes);
+    let character_bytes = up.character.map(|c| c.bytes);
+    let character_name = params.character.clone();
     let max_seconds = s.limits.song_seconds;
     let edited_dir = edited.as_ref().map(|(row, _)| s.jobs.job_dir(&row.id));
     let end = params.end;
@@ -233,6 +239,10 @@ async fn submit(
             if let (Some(name), Some(bytes)) = (&leader_name, &leader_bytes) {
                 write(name, bytes)?;
                 upload::check_leader(&incoming.join(name))?;
+            }
+            if let (Some(name), Some(bytes)) = (&character_name, &character_bytes) {
+                write(name, bytes)?;
+                upload::check_character(&incoming.join(name))?;
             }
             Ok(())
         })

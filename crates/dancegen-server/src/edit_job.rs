@@ -82,7 +82,7 @@ pub fn edited_job(jobs: &Jobs, e: &EditParams) -> Result<JobRow, ApiError> {
 }
 
 /// Copies what the edit needs from the edited job's folder `from` into the new job's folder
-/// `to` (its song, leader and the dance), and checks the ranges against the dance and, for a
+/// `to` (its song, leader, character and the dance), and checks the ranges against the dance and, for a
 /// continuation, its new `end` (the song's end when `None`) against the dance's end.
 pub fn take_files(
     from: &Path,
@@ -102,8 +102,8 @@ pub fn take_files(
             })
     };
     copy(&row.song, &row.song)?;
-    if let Some(l) = &row.leader {
-        copy(l, l)?;
+    for name in row.leader.iter().chain(&row.params.character) {
+        copy(name, name)?;
     }
     let stem = variation_stem(e.variation);
     if from.join(format!("{stem}.npz")).is_file() {

@@ -90,6 +90,12 @@ pub struct JobParams {
     /// server, not a parameter. Downloads are named after it; an edit keeps its job's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub song_title: Option<String>,
+    /// The uploaded character's file in the job folder (`character.glb` or `character.vrm`,
+    /// [`crate::upload::character_file_name`]): the job's `.glb` is it dancing. Set by the
+    /// server from the `character` part, not a parameter; an edit and "again" keep their
+    /// job's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub character: Option<String>,
 }
 
 /// Most denoising steps a user may ask for (the models are trained with 1000 timesteps).
@@ -269,6 +275,7 @@ impl JobParams {
             rig,
             edit,
             song_title: None,
+            character: None,
         })
     }
 
@@ -280,6 +287,7 @@ impl JobParams {
         self.genre = edited.genre.clone();
         self.start = edited.start;
         self.song_title = edited.song_title.clone();
+        self.character = edited.character.clone();
         // Files named for the same tool as the dance it edits, unless asked otherwise.
         if self.rig.is_none() {
             self.rig = edited.rig.clone();

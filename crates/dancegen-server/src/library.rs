@@ -50,11 +50,15 @@ pub fn again_params(row: &JobRow, seed: Option<u64>) -> Result<JobParams, ApiErr
     Ok(params)
 }
 
-/// Copies the song (and a duet's leader) of the job in `from` into the new job's folder `to`.
+/// Copies the song (and a duet's leader, and the character) of the job in `from` into the new
+/// job's folder `to`.
 pub fn copy_inputs(from: &Path, row: &JobRow, to: &Path) -> Result<(), ApiError> {
     std::fs::create_dir_all(to)
         .map_err(|e| ApiError::internal(format!("{}: {e}", to.display())))?;
-    for name in std::iter::once(&row.song).chain(row.leader.as_ref()) {
+    for name in std::iter::once(&row.song)
+        .chain(row.leader.as_ref())
+        .chain(row.params.character.as_ref())
+    {
         std::fs::copy(from.join(name), to.join(name))
             .map_err(|e| ApiError::internal(format!("copying the song of job {}: {e}", row.id)))?;
     }

@@ -1,5 +1,5 @@
-//! `POST /api/jobs`: reading the multipart upload, and checking the song and the leader
-//! before a job is queued, so a file that cannot be danced to is a 400 at once rather than a
+//! `POST /api/jobs`: reading the multipart upload, and checking the song, the leader and the
+//! character before a job is queued, so a file that cannot be danced to is a 400 at once rather than a
 //! failed job later.
 
 use std::path::Path;
@@ -9,6 +9,7 @@ use axum::extract::Multipart;
 use axum::extract::multipart::MultipartError;
 use axum::http::StatusCode;
 
+use dancegen_generate::request::Character;
 use dancegen_music::decode::{AudioSource, MonoDecoder};
 use dancegen_music::error::MusicError;
 
@@ -21,6 +22,8 @@ pub struct Upload {
     /// The song; `None` for an edit, which dances to the song of the job it edits.
     pub song: Option<UploadedFile>,
     pub leader: Option<UploadedFile>,
+    /// The user's own humanoid (`.glb`/`.vrm`) that the job's `.glb` shows dancing.
+    pub character: Option<UploadedFile>,
     pub params: JobParams,
 }
 
@@ -70,7 +73,7 @@ fn multipart_error(e: MultipartError, limit: usize) -> ApiError {
     }
 }
 
-/// Reads `song`, `leader` and `params`; any other part is an error naming it.
+/// Reads `song`, `leader`, `character` and `params`; any other part is an error naming it.
 pub async fn read(
     mut form: Multipart,
     upload_limit: usize,
@@ -78,6 +81,7 @@ pub async fn read(
 ) -> Result<Upload, ApiError> {
     let mut song = None;
     let mut leader = None;
+    let mut character = None;
     let mut params_text = None;
     let mut form_fields = Vec::new();
     while let Some(field) = form
@@ -87,7 +91,7 @@ pub async fn read(
     {
         let name = field.name().unwrap_or("").to_string();
         match name.as_str() {
-            "song" | "leader" => {
+            "song" | "leader" | "character" => {
                 let file_name = field.file_name().unwrap_or("").to_string();
                 let bytes = field
                     .bytes()
@@ -97,10 +101,10 @@ pub async fn read(
                     name: file_name,
                     bytes: bytes.to_vec(),
                 };
-                if name == "song" {
-                    song = Some(f);
-                } else {
-                    leader = Some(f);
+                match name.as_str() {
+                    "song" => song = Some(f),
+                    "leader" => leader = Some(f),
+                    _ => character = Some(f),
                 }
             }
             "params" => {
@@ -121,8 +125,8 @@ pub async fn read(
                 return Err(ApiError::field(
                     other,
                     format!(
-                        "unknown part '{other}' (send song, leader and params, or the \
-                         parameters as form fields)"
+                        "unknown part '{other}' (send song, leader, character and params, or \
+                         the parameters as form fields)"
                     ),
                 ));
             }
@@ -134,18 +138,24 @@ pub async fn read(
         max_variations,
     )?;
     if params.edit.is_some() {
-        // The song and the leader are the edited job's.
-        for (part, given) in [("song", song.is_some()), ("leader", leader.is_some())] {
+        // The song, the leader and the character are the edited job's.
+        for (part, given) in [
+            ("song", song.is_some()),
+            ("leader", leader.is_some()),
+            ("character", character.is_some()),
+        ] {
             if given {
                 return Err(ApiError::field(
                     part,
-                    "an edit dances to the song (and leader) of the job it edits; send none",
+                    "an edit dances to the song (and leader) of the job it edits, on its \
+                     character; send none",
                 ));
             }
         }
         return Ok(Upload {
             song: None,
             leader: None,
+            character: None,
             params,
         });
     }
@@ -172,9 +182,13 @@ pub async fn read(
         }
         _ => {}
     }
+    if let Some(c) = &character {
+        check_character_part(c, &params)?;
+    }
     Ok(Upload {
         song: Some(song),
         leader,
+        character,
         params,
     })
 }
@@ -194,6 +208,76 @@ pub fn leader_file_name(upload_name: &str) -> String {
         "leader.{}",
         extension_of(upload_name).unwrap_or_else(|| "bvh".into())
     )
+}
+
+/// The character's file name in the job folder (`character.glb` or `character.vrm`).
+pub fn character_file_name(upload_name: &str) -> String {
+    format!(
+        "character.{}",
+        extension_of(upload_name).unwrap_or_else(|| "glb".into())
+    )
+}
+
+/// Formats a character may come in: one file holding everything (a `.gltf` names its buffers
+/// and textures as files beside it, which an upload does not bring).
+const CHARACTER_FORMATS: [&str; 2] = ["glb", "vrm"];
+
+/// What can be said of an uploaded character before reading it: a file, of a one-file glTF
+/// format, for a dance of one dancer (as `generate --character` refuses a group and a duet
+/// whose leader is in the file).
+fn check_character_part(c: &UploadedFile, params: &JobParams) -> Result<(), ApiError> {
+    if c.bytes.is_empty() {
+        return Err(ApiError::field("character", "the file is empty"));
+    }
+    let ext = extension_of(&c.name).unwrap_or_default();
+    if !CHARACTER_FORMATS.contains(&ext.as_str()) {
+        return Err(ApiError::field(
+            "character",
+            format!(
+                "a character is a humanoid glTF in one file (.glb or .vrm), not {}; export it \
+                 as .glb with its skin",
+                if ext.is_empty() {
+                    "a file without an extension".to_string()
+                } else {
+                    format!("a .{ext} file")
+                }
+            ),
+        ));
+    }
+    if params.dancer_count() != 1 {
+        return Err(ApiError::field(
+            "character",
+            format!(
+                "a character dances alone, and a {} dance has {} dancers in its .glb; choose \
+                 the solo or holistic system",
+                params.system,
+                params.dancer_count()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads the character (blocking) as the job will ([`load_character`]), with `generate
+/// --character`'s words: a file that is not glTF, has no skin, or whose bones are not a
+/// humanoid's is refused now.
+pub fn check_character(path: &Path) -> Result<(), ApiError> {
+    load_character(path).map(|_| ())
+}
+
+/// The job folder's character, read from its own bytes only: a URI naming a file (which could
+/// be any file on the server) is refused. Errors name the field, not the server's path.
+pub fn load_character(path: &Path) -> Result<Character, ApiError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| ApiError::internal(format!("reading the character: {e}")))?;
+    Character::from_self_contained_bytes(path, &bytes).map_err(|e| {
+        // The field names the character already: the server's path is left out.
+        let shown = path.display().to_string();
+        let text = crate::error::chain(&e)
+            .replace(&format!("{shown}: "), "")
+            .replace(&shown, "the character");
+        ApiError::field("character", crate::user_words::unflag(&text))
+    })
 }
 
 /// Decodes the whole song (blocking; run it off the async threads): a file the decoder

@@ -21,7 +21,7 @@ pub fn for_user(message: &str, dir: &Path, song: &str, leader: Option<&str>) -> 
 }
 
 /// `--name` (a command-line flag: `--` then a lower-case letter) written `name`.
-fn unflag(text: &str) -> String {
+pub fn unflag(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     let mut rest = text;
     while let Some(i) = rest.find("--") {

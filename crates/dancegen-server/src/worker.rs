@@ -170,6 +170,14 @@ fn generate(
         Some(e) => crate::edit_job::library_edit(&dir, e)?,
         None => Default::default(),
     };
+    // The user's character: the .glb shows it dancing (read once for every variation).
+    let character = match &p.character {
+        Some(name) => Some(Arc::new(
+            crate::upload::load_character(&dir.join(name))
+                .map_err(|e| GenerateError::Invalid(e.message))?,
+        )),
+        None => None,
+    };
     let variations = p.variations.max(1);
     let last_store = std::sync::Mutex::new(Instant::now() - STORE_PROGRESS_EVERY);
     for k in 0..variations {
@@ -187,6 +195,7 @@ fn generate(
             .iter()
             .map(|ext| OutputRequest {
                 rig,
+                character: (*ext == "glb").then(|| character.clone()).flatten(),
                 ..OutputRequest::new(dir.join(format!("{stem}.{ext}")))
             })
             .collect();

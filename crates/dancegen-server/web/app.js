@@ -10,7 +10,8 @@
  *   GET    api/systems          → {systems: [{name, available, error?, genres, default_genre,
  *                               dancers: {min, max}, needs_leader}], limits: {upload_bytes}}
  *                               (a bare array of systems, or fields left out, also work)
- *   POST   api/jobs             multipart: params (JSON text), song (file), leader (file, duet)
+ *   POST   api/jobs             multipart: params (JSON text), song (file), leader (file, duet),
+ *                                character (file, optional: solo and holistic)
  *                               → 202 {id} | 4xx {error, field?}
  *   GET    api/jobs/<id>/events Server-Sent Events, each `data:` the job JSON (on connect and on
  *                               every change)
@@ -247,6 +248,8 @@ function systemChanged() {
   const s = systems.get(name) ?? {};
   const needs = systemNeeds(name);
   $('leader-field').hidden = !needs.leader;
+  // A character dances alone: a duet's or a group's .glb holds several dancers.
+  $('character-field').hidden = needs.dancers.max !== 1;
   $('dancers-field').hidden = !needs.chooseDancers;
   $('dancers').min = String(needs.dancers.min);
   $('dancers').max = String(needs.dancers.max);
@@ -378,7 +381,21 @@ function readParams() {
   params.mp4 = $('mp4').checked;
   if (params.mp4) params.video_size = $('video-size').value;
   if ($('rig').value !== 'smpl') params.rig = $('rig').value;
-  return { params, song, leader };
+  let character;
+  if (!$('character-field').hidden) {
+    character = $('character').files[0];
+    if (character) {
+      const ext = character.name.split('.').pop().toLowerCase();
+      if (!['glb', 'vrm'].includes(ext) || !character.name.includes('.')) {
+        fail(`“${character.name}” is not a .glb or .vrm: export your character as one .glb file with its skin.`, 'character');
+      }
+      if (character.size === 0) fail(`“${character.name}” is empty (0 B): choose your character's .glb.`, 'character');
+      if (limits.upload_bytes && song.size + character.size > limits.upload_bytes) {
+        fail(`The song and the character are ${formatSize(song.size + character.size)}; this server takes uploads up to ${formatSize(limits.upload_bytes)}.`, 'character');
+      }
+    }
+  }
+  return { params, song, leader, character };
 }
 
 async function submit() {
@@ -397,6 +414,7 @@ async function submit() {
   body.append('params', JSON.stringify(form.params));
   body.append('song', form.song, form.song.name);
   if (form.leader) body.append('leader', form.leader, form.leader.name);
+  if (form.character) body.append('character', form.character, form.character.name);
   const button = $('submit');
   button.disabled = true;
   button.textContent = 'Uploading…';

@@ -12,6 +12,12 @@
  * `dancer{d}` with joints `dancer{d}/<joint>`. Node names are not used for joints because
  * GLTFLoader sanitises them (`/` is dropped); joints are found by glTF node index through the
  * parser's associations instead.
+ *
+ * A job made with the user's character has the character's own scene instead: its bones, its
+ * meshes (skinned or parented to bones), and an animation whose `extras` list the node each
+ * SMPL joint drives (crates/dancegen-character/src/glb_out.rs, `dancegen_smpl_nodes`). The
+ * viewer takes its one dancer's joints from that list, so framing, following, the shadow and
+ * the close-up work on any rig.
  */
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -57,6 +63,10 @@ const SHADOW_OPACITY = 0.5;
 const SHADOW_FADE_HEIGHT = 0.5;
 /** Joints this close above a dancer's lowest one are its supporting feet (the shadow's centre). */
 const SUPPORT_BAND = 0.05;
+/** SMPL 24's parent joints: a joint the character has no bone for takes its parent's. */
+const SMPL_PARENTS = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21];
+/** The animation `extras` key of a character's SMPL joint nodes (dancegen_character). */
+const SMPL_NODES_EXTRA = 'dancegen_smpl_nodes';
 
 /** A soft round shadow texture (dark centre fading to nothing at the rim). */
 function shadowTexture() {
@@ -213,19 +223,33 @@ class Stage {
     this.scene.add(gltf.scene);
     this.root = gltf.scene;
 
+    const json = gltf.parser.json;
+    const smplNodes = json.animations?.[0]?.extras?.[SMPL_NODES_EXTRA];
+    // The user's character: one dancer, whose meshes may be parented to its bones.
+    this.character = Array.isArray(smplNodes);
     // glTF node index → the three.js object that represents it in this scene.
     const byNode = new Map();
     gltf.scene.traverse((o) => {
       const a = gltf.parser.associations.get(o);
       if (a && a.nodes !== undefined && !byNode.has(a.nodes)) byNode.set(a.nodes, o);
-      if (o.isSkinnedMesh) {
+      if (o.isSkinnedMesh || (this.character && o.isMesh)) {
         // Its bounding sphere is the rest pose's; a dancer who travels away from it would be
         // culled while still in view.
         o.frustumCulled = false;
         this.meshes.push(o);
       }
     });
-    const json = gltf.parser.json;
+    const node = async (i) => byNode.get(i) ?? gltf.parser.getDependency('node', i);
+    if (this.character) {
+      const bones = [];
+      for (let j = 0; j < SMPL_PARENTS.length; j++) {
+        const i = smplNodes[j];
+        if (Number.isInteger(i)) bones.push(await node(i));
+        else if (j > 0) bones.push(bones[SMPL_PARENTS[j]]);
+        else throw new Error(`${who}: the character's file names no bone for the hips.`);
+      }
+      this.dancers.push(bones);
+    }
     // Dancer d's skin: the skin of mesh node `dancer{d}` (`body` for a single dancer); files
     // without those names fall back to skin order, which is the same by construction.
     const skinOf = [];
@@ -235,14 +259,11 @@ class Stage {
       const d = m ? Number(m[1]) : n.name === 'body' ? 0 : null;
       if (d !== null && skinOf[d] === undefined) skinOf[d] = n.skin;
     });
-    const skins = json.skins ?? [];
+    const skins = this.character ? [] : json.skins ?? [];
     const order = skinOf.length === skins.length && !skinOf.includes(undefined) ? skinOf : skins.map((_, i) => i);
     for (const s of order) {
       const bones = [];
-      for (const nodeIndex of skins[s].joints) {
-        const bone = byNode.get(nodeIndex) ?? (await gltf.parser.getDependency('node', nodeIndex));
-        bones.push(bone);
-      }
+      for (const nodeIndex of skins[s].joints) bones.push(await node(nodeIndex));
       this.dancers.push(bones);
     }
     if (this.dancers.length === 0) throw new Error(`${who}: the 3D file has no skeleton.`);
@@ -269,6 +290,7 @@ class Stage {
 
   /** The skinned body that dancer `d`'s bones move (its material gives the dancer's colour). */
   bodyOf(d) {
+    if (this.character) return null;
     const root = this.dancers[d][0];
     return this.meshes.find((m) => m.skeleton?.bones.includes(root)) ?? this.meshes[d] ?? null;
   }

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use crate::common::{TestServer, demo_song, start};
+use crate::common::{TestServer, demo_song, shared, start};
 use dancegen_server::client::{Part, Reply};
 use dancegen_server::{Limits, ServeConfig};
 use serde_json::Value;
@@ -987,4 +987,143 @@ fn a_job_names_its_bones_for_the_chosen_rig() {
     for kind in ["bvh", "fbx", "glb"] {
         assert!(has_hips(kind), "the .{kind} has no bone mixamorig:Hips");
     }
+}
+
+/// The three.js robot (CC0), a character with its own bone names, two skins and rigid parts.
+fn robot() -> Vec<u8> {
+    std::fs::read(shared().join("data/holistic/three-js-robot-expressive/RobotExpressive.glb"))
+        .unwrap()
+}
+
+/// A GLB's JSON chunk and its binary chunk.
+fn glb_parts(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    (json, bytes[20 + len..].to_vec())
+}
+
+/// A GLB of `json` and the binary chunk (with its header) `bin`.
+fn glb_of(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut glb = b"glTF".to_vec();
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((20 + text.len() + bin.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&text);
+    glb.extend_from_slice(bin);
+    glb
+}
+
+/// The character upload (issue 45): a solo job with the robot makes a `.glb` that is the robot
+/// (its nodes, meshes and skins) dancing the job's dance, with the SMPL joints' nodes named
+/// for the viewer, while the other files are the dance itself; an edit and "again" keep the
+/// character. A character that cannot dance is refused at upload in `generate --character`'s
+/// words, naming the field: not glTF, no humanoid bones, a file reached outside the upload,
+/// several dancers, the wrong format.
+#[test]
+fn a_job_dances_on_the_uploaded_character() {
+    let s = start(Limits::default());
+    let song = std::fs::read(demo_song()).unwrap();
+    let with = |params: &str, name: &str, character: &[u8]| {
+        s.submit(&[
+            ("params", None, params.as_bytes()),
+            ("song", Some("demo.wav"), &song),
+            ("character", Some(name), character),
+        ])
+    };
+    let refused = |r: &Reply, words: &str| {
+        assert_eq!(
+            (r.status, r.json["field"].as_str()),
+            (400, Some("character")),
+            "{}",
+            r.json
+        );
+        let e = error_of(r);
+        assert!(e.contains(words), "{e}");
+        assert!(!e.contains("/jobs/"), "the server's path: {e}");
+    };
+    refused(&with("{}", "hero.glb", b"not a model"), "not a glTF");
+    refused(&with("{}", "hero.fbx", &robot()), ".glb or .vrm");
+    refused(&with("{}", "hero.glb", b""), "empty");
+    refused(
+        &with(
+            r#"{"system": "group", "dancers": 3}"#,
+            "robot.glb",
+            &robot(),
+        ),
+        "solo or holistic",
+    );
+    // Bones that are not a humanoid's: the robot's renamed bone0, bone1, …
+    let (json, bin) = glb_parts(&robot());
+    let mut anonymous = json.clone();
+    for (i, node) in anonymous["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .enumerate()
+    {
+        node["name"] = format!("bone{i}").into();
+    }
+    refused(&with("{}", "anon.glb", &glb_of(&anonymous, &bin)), "bone3");
+    // An image naming a file: on a server it could be any file there, so it is not read.
+    let mut reaching = json.clone();
+    reaching["images"] = serde_json::json!([{"uri": "../../song.wav"}]);
+    refused(
+        &with("{}", "reach.glb", &glb_of(&reaching, &bin)),
+        "external file",
+    );
+
+    let r = with(r#"{"seed": 2, "end": 5}"#, "RobotExpressive.glb", &robot());
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap().to_string();
+    let job = s.wait(&id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    assert_eq!(job["params"]["character"], "character.glb");
+    let is_robot = |job: &Value| {
+        let files = &job["variations"][0]["files"];
+        let (out, _) = glb_parts(&s.download(files["glb"].as_str().unwrap()));
+        for key in ["nodes", "meshes", "skins"] {
+            assert_eq!(
+                out[key].as_array().map(Vec::len),
+                json[key].as_array().map(Vec::len)
+            );
+        }
+        let anim = &out["animations"][0];
+        assert_eq!(anim["name"], "dance");
+        let nodes = anim["extras"]["dancegen_smpl_nodes"].as_array().unwrap();
+        assert_eq!(
+            out["nodes"][nodes[15].as_u64().unwrap() as usize]["name"],
+            "Head"
+        );
+        // The joints file is the dance, not the character.
+        let npy = dancegen_io::npy::parse_npy(&s.download(files["npy"].as_str().unwrap())).unwrap();
+        assert_eq!(&npy.shape[1..], &[24, 3]);
+    };
+    is_robot(&job);
+
+    // An edit of it is the robot again; so is the dance made again with another seed.
+    let edit = format!(r#"{{"seed": 7, "edit": {{"of": "{id}", "regenerate": [[1, 3]]}}}}"#);
+    let r = s.submit(&[("params", None, edit.as_bytes())]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let edited = s.wait(r.json["id"].as_str().unwrap(), JOB_TIMEOUT);
+    assert_eq!(edited["state"], "done", "{edited}");
+    is_robot(&edited);
+    let r = s.send_json("POST", &format!("/api/jobs/{id}/again"), r#"{"seed": 3}"#);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let again = s.wait(r.json["id"].as_str().unwrap(), JOB_TIMEOUT);
+    assert_eq!(again["state"], "done", "{again}");
+    is_robot(&again);
+    // An edit brings no character of its own.
+    let r = s.submit(&[
+        ("params", None, edit.as_bytes()),
+        ("character", Some("robot.glb"), &robot()),
+    ]);
+    assert_eq!(
+        (r.status, r.json["field"].as_str()),
+        (400, Some("character"))
+    );
 }
