@@ -416,6 +416,9 @@ class Stage {
       this.root.updateMatrixWorld(true);
       for (const bones of this.dancers) for (const b of bones) box.expandByPoint(b.getWorldPosition(p));
       for (const h of this.heads ?? []) box.expandByPoint(h.getWorldPosition(p).setY(p.y + HEAD_RADIUS));
+      // A character's head, hands and feet reach past its bones (the robot's head is as
+      // large as its body): frame its meshes as posed.
+      if (this.character) for (const m of this.meshes) box.expandByObject(m);
     }
     this.pose(0);
     return box;

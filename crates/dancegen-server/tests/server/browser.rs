@@ -206,27 +206,13 @@ fn check_figures(report: &Value, name: &str, dancers: usize) {
             v(&heads[d], 1) > v(&pelvis[d], 1) + 0.3,
             "{name} dancer {d}: head {f}"
         );
-        let s = &shadows[d];
-        let at = &s["at"];
-        let joints = scene[d].as_array().unwrap();
-        let low = joints.iter().map(|j| v(j, 1)).fold(f64::MAX, f64::min);
-        let feet: Vec<&Value> = joints.iter().filter(|j| v(j, 1) <= low + 0.05).collect();
-        let mean = |k: usize| feet.iter().map(|j| v(j, k)).sum::<f64>() / feet.len() as f64;
-        let off = (v(at, 0) - mean(0)).hypot(v(at, 2) - mean(2));
-        assert!(
-            off < 1e-4,
-            "{name} dancer {d}: the shadow is {off} m from under the supporting feet: {f}"
-        );
-        assert!(
-            v(at, 1).abs() < 0.01,
-            "{name} dancer {d}: the shadow is off the floor: {f}"
-        );
-        let height = lowest[d].as_f64().unwrap().max(0.0);
-        let opacity = s["opacity"].as_f64().unwrap();
-        let want = 0.5 * (1.0 - 0.75 * (height / 0.5).min(1.0));
-        assert!(
-            (opacity - want).abs() < 1e-6,
-            "{name} dancer {d}: opacity {opacity} at {height} m: {f}"
+        check_shadow(
+            f,
+            &shadows[d],
+            &scene[d],
+            lowest[d].as_f64().unwrap(),
+            name,
+            d,
         );
     }
     let legend: Vec<&str> = f["legend"]
@@ -247,6 +233,34 @@ fn check_figures(report: &Value, name: &str, dancers: usize) {
             "{name}: a solo dance needs no legend: {f}"
         );
     }
+}
+
+/// Dancer `d`'s contact shadow `s` (figures `f`): exactly (1e-4 m) at the mean floor position
+/// of its joints `joints` within 5 cm of the lowest, on the floor, and paler the higher the
+/// lowest joint (`lowest` m) is.
+fn check_shadow(f: &Value, s: &Value, joints: &Value, lowest: f64, name: &str, d: usize) {
+    let v = |x: &Value, i: usize| x[i].as_f64().unwrap();
+    let at = &s["at"];
+    let joints = joints.as_array().unwrap();
+    let low = joints.iter().map(|j| v(j, 1)).fold(f64::MAX, f64::min);
+    let feet: Vec<&Value> = joints.iter().filter(|j| v(j, 1) <= low + 0.05).collect();
+    let mean = |k: usize| feet.iter().map(|j| v(j, k)).sum::<f64>() / feet.len() as f64;
+    let off = (v(at, 0) - mean(0)).hypot(v(at, 2) - mean(2));
+    assert!(
+        off < 1e-4,
+        "{name} dancer {d}: the shadow is {off} m from under the supporting feet: {f}"
+    );
+    assert!(
+        v(at, 1).abs() < 0.01,
+        "{name} dancer {d}: the shadow is off the floor: {f}"
+    );
+    let height = lowest.max(0.0);
+    let opacity = s["opacity"].as_f64().unwrap();
+    let want = 0.5 * (1.0 - 0.75 * (height / 0.5).min(1.0));
+    assert!(
+        (opacity - want).abs() < 1e-6,
+        "{name} dancer {d}: opacity {opacity} at {height} m: {f}"
+    );
 }
 
 /// The timeline under the scrub bar (issue 45): shown, with the job's waveform (800 slices)
@@ -658,4 +672,66 @@ fn a_holistic_dance_has_a_close_up_on_the_face_and_hands() {
         dc < df / 2.0,
         "close-up at {dc:.2} m, front at {df:.2} m: {v}"
     );
+}
+
+/// The user's character in the viewer (issue 45): a solo job made with the three.js robot
+/// shows the robot dancing. Its one dancer's joints are the robot's bones that the file names
+/// for SMPL's joints: the head above the pelvis, moving between 1 s and 5 s, the camera on
+/// the head, the contact shadow under its supporting feet, no head sphere (the robot has its
+/// own head) and no page error. The screenshot at 1 s is `docs/images/serve-character.png`.
+#[test]
+fn a_job_made_with_my_character_shows_it_dancing() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let base = s.server.url();
+    let song = std::fs::read(demo_song()).unwrap();
+    let robot =
+        std::fs::read(shared().join("data/holistic/three-js-robot-expressive/RobotExpressive.glb"))
+            .unwrap();
+    let r = s.submit(&[
+        ("params", None, br#"{"seed": 2, "end": 8}"#),
+        ("song", Some("demo.ogg"), &song),
+        ("character", Some("RobotExpressive.glb"), &robot),
+    ]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap();
+    let job = s.wait(id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    let report = view(&s, id, "character");
+    check_page(&report, &base, "character");
+    check_controls(&report, "character");
+    let at = |t: u32| report["joints"][t.to_string()][0].clone();
+    let (one, five) = (at(1), at(5));
+    let dancers = one.as_array().unwrap();
+    assert_eq!(dancers.len(), 1, "one dancer: {one}");
+    let joints = dancers[0].as_array().unwrap();
+    assert_eq!(joints.len(), 24, "the SMPL joints' bones: {one}");
+    let v = |x: &Value, i: usize| x[i].as_f64().unwrap();
+    let (pelvis, head) = (&joints[0], &joints[15]);
+    assert!(
+        v(head, 1) > v(pelvis, 1) + 0.3,
+        "head {head}, pelvis {pelvis}"
+    );
+    let moved = (0..24)
+        .map(|j| {
+            let (a, b) = (&one[0][j], &five[0][j]);
+            (0..3)
+                .map(|k| (v(a, k) - v(b, k)).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(moved > 0.1, "the robot moved {moved} m from 1 s to 5 s");
+    let f = &report["figures"][0];
+    assert_eq!(f["heads"], serde_json::json!([]), "no head sphere: {f}");
+    check_shadow(
+        f,
+        &f["shadows"][0],
+        &dancers[0],
+        f["lowest"][0].as_f64().unwrap(),
+        "character",
+        0,
+    );
+    assert_eq!(report["views"]["front"]["headInView"], true, "{report}");
+    assert_eq!(report["views"]["front"]["headSpheres"], 0, "{report}");
 }
