@@ -404,24 +404,47 @@ class Stage {
   }
 
   /**
-   * Box around every joint over the whole clip (sampled), for framing: dancers who travel
-   * stay in view without the follow camera.
+   * Boxes around every joint over the whole clip (sampled), for framing: `world`, where the
+   * dancers go (the fixed views keep dancers who travel in view), and `around`, the same taken
+   * horizontally from the dancers' root centroid at each moment (heights as they are), which
+   * the follow camera frames: the dancers large, wherever they are.
    */
   motionBounds() {
-    const box = new THREE.Box3();
+    const world = new THREE.Box3();
+    const around = new THREE.Box3();
+    const now = new THREE.Box3();
     const p = new THREE.Vector3();
     const samples = 24;
     for (let i = 0; i <= samples; i++) {
       this.pose((this.duration * i) / samples);
       this.root.updateMatrixWorld(true);
-      for (const bones of this.dancers) for (const b of bones) box.expandByPoint(b.getWorldPosition(p));
-      for (const h of this.heads ?? []) box.expandByPoint(h.getWorldPosition(p).setY(p.y + HEAD_RADIUS));
+      now.makeEmpty();
+      for (const bones of this.dancers) for (const b of bones) now.expandByPoint(b.getWorldPosition(p));
+      for (const h of this.heads ?? []) now.expandByPoint(h.getWorldPosition(p).setY(p.y + HEAD_RADIUS));
       // A character's head, hands and feet reach past its bones (the robot's head is as
       // large as its body): frame its meshes as posed.
-      if (this.character) for (const m of this.meshes) box.expandByObject(m);
+      if (this.character) for (const m of this.meshes) now.expandByObject(m);
+      world.union(now);
+      around.union(now.translate(this.floorCentroid().negate()));
     }
     this.pose(0);
-    return box;
+    return { world, around };
+  }
+
+  /** The dancers' root centroid on the floor (y = 0), where the follow camera looks. */
+  floorCentroid() {
+    return this.rootCentroid().setY(0);
+  }
+
+  /**
+   * Frames `view` for the follow camera: the `around` box placed on the dancers now, and the
+   * offset of the camera's target from their centroid kept from then on ([`follow`]).
+   */
+  frameFollowing(view, around) {
+    this.root.updateMatrixWorld(true);
+    const c = this.floorCentroid();
+    this.setView(view, around.clone().translate(c));
+    this.followOffset = this.controls.target.clone().sub(c);
   }
 
   /**
@@ -476,10 +499,14 @@ class Stage {
     this.controls.update();
   }
 
-  /** Moves camera and target together so the target sits on the dancers' root centroid. */
+  /**
+   * Moves camera and target together, along the floor, so the target keeps its place over the
+   * dancers' root centroid: the camera travels with them, and a jump or a crouch still shows
+   * against the floor.
+   */
   follow() {
-    const c = this.rootCentroid();
-    const delta = c.sub(this.controls.target);
+    const c = this.floorCentroid().add(this.followOffset ?? new THREE.Vector3());
+    const delta = c.sub(this.controls.target).setY(0);
     if (delta.lengthSq() < 1e-12) return;
     this.controls.target.add(delta);
     this.camera.position.add(delta);
@@ -601,13 +628,21 @@ export class Viewer {
     this.duration = Math.max(...this.stages.map((s) => s.duration));
     // One framing for all variations, so that side by side they are seen at the same scale.
     const bounds = new THREE.Box3();
-    for (const s of this.stages) bounds.union(s.motionBounds());
+    const around = new THREE.Box3();
+    for (const s of this.stages) {
+      const b = s.motionBounds();
+      bounds.union(b.world);
+      around.union(b.around);
+    }
     for (const s of this.stages) {
       s.bounds = bounds;
+      s.around = around;
       s.resize();
-      s.setView('front', s.bounds);
       s.controls.addEventListener('change', () => this.cameraMoved(s));
     }
+    // The dancers framed large from the front, followed as they travel.
+    this.following = true;
+    this.frameStages();
     this.wireControls();
     await this.loadTimeline();
     const ro = new ResizeObserver(() => {
@@ -755,6 +790,9 @@ export class Viewer {
       headInView: Math.abs(ndc.x) < 1 && Math.abs(ndc.y) < 1 && ndc.z < 1,
       face: Boolean(s.face),
       headSpheres: s.heads?.length ?? 0,
+      following: this.following,
+      target: s.controls.target.toArray(),
+      centroid: s.floorCentroid().toArray(),
     };
   }
 
@@ -830,20 +868,31 @@ export class Viewer {
     };
   }
 
+  /**
+   * A preset (front, side, top, close-up: fixed framings of where the dancers go) or Follow,
+   * which turns the follow camera on or off in the current preset's direction.
+   */
   setView(view) {
     if (view === 'follow') {
       this.following = !this.following;
     } else {
       this.following = false;
       this.view = view;
-      this.syncing = true;
-      // The close-up frames the head and hands from the front and then follows the chest.
-      for (const s of this.stages) {
-        if (view === 'closeup') s.setView('front', s.closeupBox(), CLOSEUP_LEAST);
-        else s.setView(view, s.bounds);
-      }
-      this.syncing = false;
     }
+    this.frameStages();
+  }
+
+  /** Places every variation's camera for the current view and follow state. */
+  frameStages() {
+    this.syncing = true;
+    for (const s of this.stages) {
+      // The close-up frames the head and hands from the front and then follows the chest.
+      if (this.view === 'closeup') s.setView('front', s.closeupBox(), CLOSEUP_LEAST);
+      else if (this.following) s.frameFollowing(this.view, s.around);
+      else s.setView(this.view, s.bounds);
+    }
+    this.syncing = false;
+    this.dirty = true;
     for (const b of this.root.querySelectorAll('.view')) {
       const on = b.dataset.view === 'follow' ? this.following : b.dataset.view === 'closeup' && this.view === 'closeup';
       b.setAttribute('aria-pressed', String(on));

@@ -7,14 +7,16 @@
  *
  * Opens <base_url>/?job=<job_id>, awaits `window.__viewer.ready`, seeks the song to 1, 2 and
  * 5 s and reads every variation's joint positions, screenshots the viewer at 1 s and 5 s
- * (<out_dir>/shot_1.png, shot_5.png), plays for about a second, and prints ONE JSON line:
+ * (<out_dir>/shot_1.png, shot_5.png; follow_5.png as the page opened), plays for about a second, and prints ONE JSON line:
  *
  *   {"joints": {"1": [per variation: [dancer][24][x,y,z]], "2": ..., "5": ...},
  *    "seeked": {"1": {"audio": s, "dance": s}, ...},
  *    "play": {"t0": s, "t1": s, "moved": max |joint change| in metres},
  *    "timeline": {shown, beats, peaks, firstBeat, lastBeat, duration, inked (painted pixels)},
+ *    "follow": {"1": camera, "5": camera} as the page opened (before any view is chosen),
  *    "views": {front: camera, closeupShown, closeup: camera (holistic)}, where camera is
- *              {view, distance to the head, headInView, face, headSpheres},
+ *              {view, distance to the head, headInView, face, headSpheres, following,
+ *               target: [x,y,z], centroid: the dancers' root centroid on the floor [x,0,z]},
  *    "figures": [per variation at 1 s: {heads: [[x,y,z]], shadows: [{at, radius, opacity}],
  *                pelvis: [[x,y,z]], lowest: [y], legend: [text]}],
  *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
@@ -127,6 +129,19 @@ try {
         return Array.from({ length: v.count() }, (_, i) => v.figures(i));
       }, SEEK_TIMES[0]));
       result.timeline = await page.evaluate(() => window.__viewer.timeline());
+    });
+    // The camera as the page opens: following the dancers (read at 1 s and 5 s, each after the
+    // frame that seek drew).
+    await step('follow', async () => {
+      result.follow = {};
+      for (const t of [1, 5]) {
+        await seekAndRead(t);
+        await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+        result.follow[t] = await page.evaluate(() => window.__viewer.camera());
+      }
+      await (await page.$('#viewer')).screenshot({ path: join(outDir, 'follow_5.png') });
+      // Back to the first seek time, where the views below were always read.
+      await seekAndRead(1);
     });
     // The camera presets: Front, and the holistic close-up where it is offered.
     await step('views', async () => {

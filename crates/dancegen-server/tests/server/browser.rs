@@ -263,6 +263,49 @@ fn check_shadow(f: &Value, s: &Value, joints: &Value, lowest: f64, name: &str, d
     );
 }
 
+/// The camera as the page opens (issue 45): following the dancers, with their heads in the
+/// picture, the target keeping its place over their root centroid on the floor (1e-4 m)
+/// from 1 s to 5 s, and closer to them than the fixed Front view that keeps their whole path
+/// in the picture, unless they do not travel.
+fn check_follow(report: &Value, name: &str) {
+    let f = &report["follow"];
+    let v = |x: &Value, i: usize| x[i].as_f64().unwrap();
+    let offset = |c: &Value| {
+        assert_eq!(
+            c["following"], true,
+            "{name}: not following as the page opens: {f}"
+        );
+        assert_eq!(
+            c["headInView"], true,
+            "{name}: the head is out of the picture: {f}"
+        );
+        [
+            v(&c["target"], 0) - v(&c["centroid"], 0),
+            v(&c["target"], 2) - v(&c["centroid"], 2),
+        ]
+    };
+    let (a, b) = (offset(&f["1"]), offset(&f["5"]));
+    let drift = (a[0] - b[0]).hypot(a[1] - b[1]);
+    assert!(
+        drift < 1e-4,
+        "{name}: the camera left the dancers by {drift} m: {f}"
+    );
+    let front = &report["views"]["front"];
+    assert_eq!(
+        front["following"], false,
+        "{name}: Front is a fixed view: {front}"
+    );
+    let (df, dd) = (
+        f["1"]["distance"].as_f64().unwrap(),
+        front["distance"].as_f64().unwrap(),
+    );
+    println!("{name}: camera {df:.2} m from the head when following, {dd:.2} m in Front");
+    assert!(
+        df <= dd + 1e-6,
+        "{name}: following frames from farther ({df} m) than Front ({dd} m)"
+    );
+}
+
 /// The timeline under the scrub bar (issue 45): shown, with the job's waveform (800 slices)
 /// and beats (the demo song has a steady beat: more than one a second, inside the dance),
 /// and painted.
@@ -352,6 +395,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         check_page(&report, &base, name);
         check_downloads(&report, &job, name);
         check_controls(&report, name);
+        check_follow(&report, name);
         check_figures(&report, name, if name == "duet" { 2 } else { 1 });
         check_timeline(&report, &job, name);
         assert_eq!(
@@ -654,6 +698,7 @@ fn a_holistic_dance_has_a_close_up_on_the_face_and_hands() {
     assert_eq!(job["state"], "done", "{job}");
     let report = view(&s, id, "holistic");
     assert_eq!(report["errors"], serde_json::json!([]), "{report}");
+    check_follow(&report, "holistic");
     let v = &report["views"];
     assert_eq!(v["closeupShown"], true, "{v}");
     let (front, close) = (&v["front"], &v["closeup"]);
@@ -700,6 +745,7 @@ fn a_job_made_with_my_character_shows_it_dancing() {
     let report = view(&s, id, "character");
     check_page(&report, &base, "character");
     check_controls(&report, "character");
+    check_follow(&report, "character");
     let at = |t: u32| report["joints"][t.to_string()][0].clone();
     let (one, five) = (at(1), at(5));
     let dancers = one.as_array().unwrap();
