@@ -791,6 +791,12 @@ export class Viewer {
       face: Boolean(s.face),
       headSpheres: s.heads?.length ?? 0,
       following: this.following,
+      // Every dancer's joints inside the picture, of all of them.
+      jointsInView: s.dancers.flat().filter((b) => {
+        const q = b.getWorldPosition(new THREE.Vector3()).project(s.camera);
+        return Math.abs(q.x) < 1 && Math.abs(q.y) < 1 && q.z < 1;
+      }).length,
+      joints: s.dancers.flat().length,
       target: s.controls.target.toArray(),
       centroid: s.floorCentroid().toArray(),
     };

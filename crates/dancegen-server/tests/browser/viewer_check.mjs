@@ -16,10 +16,13 @@
  *    "follow": {"1": camera, "5": camera} as the page opened (before any view is chosen),
  *    "views": {front: camera, closeupShown, closeup: camera (holistic)}, where camera is
  *              {view, distance to the head, headInView, face, headSpheres, following,
+ *               jointsInView, joints (of the first variation's dancers),
  *               target: [x,y,z], centroid: the dancers' root centroid on the floor [x,0,z]},
  *    "figures": [per variation at 1 s: {heads: [[x,y,z]], shadows: [{at, radius, opacity}],
  *                pelvis: [[x,y,z]], lowest: [y], legend: [text]}],
  *    "downloads": {"variations": [per variation: [{text, href, download}]], "all": {hidden, href}},
+ *    "phone": {scrolled, height, canvases: [[top, bottom] in the page], play: {top, bottom, onTop},
+ *              scrub: {…}} at 375 × 667 scrolled to the end (screenshot <out_dir>/phone.png),
  *    "requests": [every URL the page asked for], "errors": [page errors, console errors, HTTP ≥ 400]}
  *
  * It asserts nothing (the Rust test does) and exits 0, except when the page never becomes
@@ -219,6 +222,32 @@ try {
           [...f.querySelectorAll('.downloads a')].map((a) => ({ text: a.textContent, href: a.getAttribute('href'), download: a.getAttribute('download') }))),
         all: { hidden: document.getElementById('download-all-box').hidden, href: document.getElementById('download-all').getAttribute('href') },
       }));
+    });
+    // On a phone (375 × 667): scrolled to the end of the page, past the stacked variations,
+    // Play and the timeline are still on the screen and nothing covers them.
+    await step('phone', async () => {
+      await page.setViewport({ width: 375, height: 667, isMobile: true, hasTouch: true });
+      await new Promise((r) => setTimeout(r, 300));
+      await page.evaluate(() => window.scrollTo(0, document.documentElement.scrollHeight));
+      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+      result.phone = await page.evaluate(() => {
+        const reach = (id) => {
+          const r = document.getElementById(id).getBoundingClientRect();
+          const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+          return { top: r.top, bottom: r.bottom, onTop: Boolean(top?.closest(`#${id}`)) };
+        };
+        return {
+          scrolled: window.scrollY,
+          height: window.innerHeight,
+          canvases: [...document.querySelectorAll('#variations-box .canvas-box')].map((c) => {
+            const r = c.getBoundingClientRect();
+            return [r.top + window.scrollY, r.bottom + window.scrollY];
+          }),
+          play: reach('play'),
+          scrub: reach('scrub'),
+        };
+      });
+      await page.screenshot({ path: join(outDir, 'phone.png') });
     });
     process.stdout.write(`${JSON.stringify(result)}\n`);
   }

@@ -263,10 +263,9 @@ fn check_shadow(f: &Value, s: &Value, joints: &Value, lowest: f64, name: &str, d
     );
 }
 
-/// The camera as the page opens (issue 45): following the dancers, with their heads in the
-/// picture, the target keeping its place over their root centroid on the floor (1e-4 m)
-/// from 1 s to 5 s, and closer to them than the fixed Front view that keeps their whole path
-/// in the picture, unless they do not travel.
+/// The camera as the page opens (issue 45): following the dancers, with every joint of every
+/// dancer in the picture at 1 s and at 5 s, and the target keeping its place over their root
+/// centroid on the floor (1e-4 m) in between.
 fn check_follow(report: &Value, name: &str) {
     let f = &report["follow"];
     let v = |x: &Value, i: usize| x[i].as_f64().unwrap();
@@ -278,6 +277,10 @@ fn check_follow(report: &Value, name: &str) {
         assert_eq!(
             c["headInView"], true,
             "{name}: the head is out of the picture: {f}"
+        );
+        assert_eq!(
+            c["jointsInView"], c["joints"],
+            "{name}: joints out of the picture: {f}"
         );
         [
             v(&c["target"], 0) - v(&c["centroid"], 0),
@@ -295,15 +298,40 @@ fn check_follow(report: &Value, name: &str) {
         front["following"], false,
         "{name}: Front is a fixed view: {front}"
     );
-    let (df, dd) = (
+    println!(
+        "{name}: camera {:.2} m from the head when following, {:.2} m in Front",
         f["1"]["distance"].as_f64().unwrap(),
         front["distance"].as_f64().unwrap(),
     );
-    println!("{name}: camera {df:.2} m from the head when following, {dd:.2} m in Front");
+}
+
+/// A phone-sized page (issue 45): the variations stack, one under the other, and scrolled past
+/// them to the end of the page, Play and the scrub bar are still on the screen, uncovered.
+fn check_phone(report: &Value, name: &str) {
+    let p = &report["phone"];
+    let canvases = p["canvases"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{name}: {p}"));
+    let at = |c: &Value, i: usize| c[i].as_f64().unwrap();
+    for pair in canvases.windows(2) {
+        assert!(
+            at(&pair[1], 0) >= at(&pair[0], 1),
+            "{name}: the variations are not stacked on a phone: {p}"
+        );
+    }
     assert!(
-        df <= dd + 1e-6,
-        "{name}: following frames from farther ({df} m) than Front ({dd} m)"
+        p["scrolled"].as_f64().unwrap() > 0.0,
+        "{name}: nothing to scroll: {p}"
     );
+    let height = p["height"].as_f64().unwrap();
+    for id in ["play", "scrub"] {
+        let c = &p[id];
+        assert!(
+            c["top"].as_f64().unwrap() >= 0.0 && c["bottom"].as_f64().unwrap() <= height,
+            "{name}: {id} is off the phone's screen: {p}"
+        );
+        assert_eq!(c["onTop"], true, "{name}: {id} is covered: {p}");
+    }
 }
 
 /// The timeline under the scrub bar (issue 45): shown, with the job's waveform (800 slices)
@@ -375,7 +403,8 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
     let s = start(Limits::default());
     let base = s.server.url();
 
-    let solo = s.submit_song(&demo_song(), r#"{"seed": 2, "end": 8}"#);
+    // Two variations of the solo: side by side on a desktop, stacked on a phone.
+    let solo = s.submit_song(&demo_song(), r#"{"seed": 2, "end": 8, "variations": 2}"#);
     assert_eq!(solo.status, 202, "{}", solo.json);
     let song = std::fs::read(demo_song()).unwrap();
     let leader = trimmed_bvh(&shared().join("data/cmu-salsa/61_13_scaled.bvh"), 7.0);
@@ -396,6 +425,7 @@ fn the_viewer_shows_the_jobs_joints_in_time_with_the_song() {
         check_downloads(&report, &job, name);
         check_controls(&report, name);
         check_follow(&report, name);
+        check_phone(&report, name);
         check_figures(&report, name, if name == "duet" { 2 } else { 1 });
         check_timeline(&report, &job, name);
         assert_eq!(
