@@ -3,17 +3,22 @@
  * Drives the song form of the web app in headless Chromium, with the keyboard and on a phone,
  * and reports what it showed, for the server's Rust test to check:
  *
- *   node form_check.mjs <base_url> <out_dir> <empty_file>
+ *   node form_check.mjs <base_url> <out_dir> <empty_file> <song> <character.glb>
  *
  * Desktop (1280 × 900): tabs to the drop zone, presses Enter, and, when a file chooser opens,
  * gives it <empty_file> (0 bytes); presses Space on the zone again; then submits the form.
  * Phone (375 × 667, touch): reads the drop zone's words and how wide each dance system's name
- * is against the room its select has. Screenshots: <out_dir>/phone.png. Prints ONE JSON line:
+ * is against the room its select has. Then the character field (desktop): which systems offer
+ * it, <empty_file> refused as a character, and <character.glb> sent with <song>, ending at 4 s
+ * (the job's params read back). Screenshots: <out_dir>/phone.png, character-form.png. Prints
+ * ONE JSON line:
  *
  *   {"desktop": {"focused": id of the element focused after the tabs, "enter": chooser opened,
  *    "space": chooser opened, "name": the chosen file's line, "notice": the message after
  *    submit, "invalid": the field marked invalid},
  *    "phone": {"words": drop zone text, "room": px for the text, "options": [[text, px]]},
+ *    "character": {"shownFor": {system: field shown}, "refused": {notice, invalid},
+ *                  "params": the params of the job the form made},
  *    "errors": [page errors]}
  *
  * It asserts nothing (the Rust test does) and exits 0, except when the page never shows its
@@ -27,9 +32,9 @@ import { collectErrors, launchChromium } from './chromium.mjs';
 // generating dances on both cores, 3 s was once too short for the first one.
 const CHOOSER_MS = 15_000;
 
-const [baseArg, outDir, emptyFile] = process.argv.slice(2);
-if (!baseArg || !outDir || !emptyFile) {
-  console.error('usage: node form_check.mjs <base_url> <out_dir> <empty_file>');
+const [baseArg, outDir, emptyFile, songFile, characterFile] = process.argv.slice(2);
+if (!baseArg || !outDir || !emptyFile || !songFile || !characterFile) {
+  console.error('usage: node form_check.mjs <base_url> <out_dir> <empty_file> <song> <character.glb>');
   process.exit(2);
 }
 const base = baseArg.replace(/\/+$/, '');
@@ -101,6 +106,41 @@ try {
     };
   });
   await phone.screenshot({ path: join(outDir, 'phone.png'), fullPage: true });
+
+  // The character flow: the field offered for one dancer only; a file that is not a .glb or
+  // .vrm refused in the page, naming the field; the character sent with a song makes a job
+  // whose params name it.
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1280, height: 900 });
+  await open(page);
+  const shownFor = {};
+  for (const system of ['solo', 'duet', 'group', 'holistic']) {
+    await page.select('#system', system);
+    shownFor[system] = await page.$eval('#character-field', (e) => !e.hidden);
+  }
+  result.character = { shownFor };
+  await page.select('#system', 'solo');
+  await (await page.$('#song')).uploadFile(songFile);
+  await page.$eval('#end', (e) => { e.value = '4'; });
+  const character = await page.$('#character');
+  await character.uploadFile(emptyFile);
+  await page.click('#submit');
+  await new Promise((r) => setTimeout(r, 300));
+  result.character.refused = {
+    notice: await page.$eval('#notice', (e) => (e.hidden ? null : e.textContent)),
+    invalid: await page.evaluate(() => document.querySelector('[aria-invalid="true"]')?.id ?? null),
+  };
+  await character.uploadFile(characterFile);
+  await page.screenshot({ path: join(outDir, 'character-form.png') });
+  await page.click('#submit');
+  // The job's page, or the refusal shown in the notice.
+  await page.waitForFunction(() => new URLSearchParams(location.search).has('job')
+    || (!document.getElementById('notice').hidden && document.getElementById('submit').textContent !== 'Uploading…'), { timeout: 60_000 });
+  result.character.params = await page.evaluate(async () => {
+    const id = new URLSearchParams(location.search).get('job');
+    if (!id) return { refused: document.getElementById('notice').textContent };
+    return (await (await fetch(`api/jobs/${encodeURIComponent(id)}`)).json()).params;
+  });
 } catch (e) {
   console.error(`form_check: ${e.message}`);
   exitCode = 1;

@@ -581,7 +581,8 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
 /// The song form with the keyboard and on a phone (issue 45): the drop zone is a tab stop
 /// that Enter and Space open the file picker from; an empty file shows as "0 B" and is refused
 /// before upload, naming the field; on a touch screen the zone says "Choose a song", and every
-/// dance system's name fits its drop-down.
+/// dance system's name fits its drop-down. The character field is offered for solo and
+/// holistic dances, refuses a file that is not a character, and sends the one chosen.
 #[test]
 fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
     check_prerequisites();
@@ -589,12 +590,24 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
     let dir = tempfile::tempdir().unwrap();
     let empty = dir.path().join("empty.wav");
     std::fs::write(&empty, b"").unwrap();
+    // Copies in the test's own folder: Chromium refused to upload the robot from the shared
+    // data's read-only folder (net::ERR_ACCESS_DENIED); the song is copied alike.
+    let song = dir.path().join("demo.ogg");
+    std::fs::copy(demo_song(), &song).unwrap();
+    let robot = dir.path().join("RobotExpressive.glb");
+    std::fs::copy(
+        shared().join("data/holistic/three-js-robot-expressive/RobotExpressive.glb"),
+        &robot,
+    )
+    .unwrap();
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("form-shots");
     let out = Command::new("node")
         .arg(browser_dir().join("form_check.mjs"))
         .arg(s.server.url())
         .arg(&shots)
         .arg(&empty)
+        .arg(&song)
+        .arg(&robot)
         .output()
         .expect("this test needs node (Node.js) on the PATH");
     assert!(
@@ -631,6 +644,24 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
         let width = o[1].as_f64().unwrap();
         assert!(width <= room, "{o} is cut: {width:.0} px in {room:.0} px");
     }
+    // The character field (issue 45): offered for one dancer, a file that is not a .glb or
+    // .vrm refused in the page naming the field, the robot sent with the song.
+    let c = &r["character"];
+    assert_eq!(
+        c["shownFor"],
+        serde_json::json!({"solo": true, "duet": false, "group": false, "holistic": true}),
+        "{c}"
+    );
+    assert_eq!(c["refused"]["invalid"], "character", "{c}");
+    assert!(
+        c["refused"]["notice"]
+            .as_str()
+            .unwrap_or("")
+            .contains("is not a .glb or .vrm"),
+        "{c}"
+    );
+    assert_eq!(c["params"]["character"], "character.glb", "{c}");
+    assert_eq!(c["params"]["end"], 4.0, "{c}");
 }
 
 /// "My dances" in the page (issue 45): two finished dances are listed newest first with their
