@@ -24,7 +24,7 @@
  */
 import { Viewer, downloadLinks } from './viewer.js';
 import { EditPanel, fetchVersions, renderVersions } from './edit.js';
-import { Library, danceTitle } from './library.js';
+import { Library, STATE_WORDS, againHref, danceTitle } from './library.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -161,8 +161,65 @@ function route() {
   $('job-view').hidden = !id;
   if (id) openJob(id);
   else {
-    showForm();
+    const again = query.get('again');
+    showForm().then(() => again && fillFromJob(again));
     library.refresh();
+  }
+}
+
+/**
+ * "Try again" on a failed or cancelled dance: the form filled in with its settings and its
+ * files (the song, a duet's leader, the character, fetched back from the server), so that the
+ * user changes what made it fail and makes the dance.
+ */
+async function fillFromJob(id) {
+  try {
+    const res = await fetch(`api/jobs/${encodeURIComponent(id)}`);
+    if (!res.ok) throw new Error((await responseError(res, 'Reading that dance')).message);
+    const job = await res.json();
+    const p = job.params ?? {};
+    if (systems.has(p.system)) {
+      $('system').value = p.system;
+      systemChanged();
+    }
+    const set = (field, v) => { $(field).value = v === undefined || v === null ? '' : String(v); };
+    if (p.dancers !== undefined) set('dancers', p.dancers);
+    set('seed', p.seed ?? 0);
+    if (p.genre) $('genre').value = p.genre;
+    set('start', p.start);
+    set('end', p.end);
+    set('steps', p.steps);
+    $('variations').value = String(p.variations ?? 1);
+    $('mp4').checked = Boolean(p.mp4);
+    $('video-size-field').hidden = !p.mp4;
+    if (p.video_size) $('video-size').value = p.video_size;
+    $('rig').value = p.rig ?? 'smpl';
+    const files = job.files ?? {};
+    const fetchFile = async (key, name) => {
+      const r = await fetch(files[key]);
+      if (!r.ok) throw new Error(`its file ${key} cannot be read (HTTP ${r.status})`);
+      return new File([await r.blob()], name, { type: r.headers.get('content-type') ?? '' });
+    };
+    const put = (input, file) => {
+      const list = new DataTransfer();
+      list.items.add(file);
+      $(input).files = list.files;
+    };
+    const ext = (key) => key.slice(key.lastIndexOf('.'));
+    const songKey = Object.keys(files).find((k) => files[k] === job.song);
+    if (!songKey) throw new Error('its song is not on the server any more');
+    const song = await fetchFile(songKey, `${p.song_title ?? 'song'}${ext(songKey)}`);
+    put('song', song);
+    setSong(song);
+    // The uploaded leader (leader.<ext>; a finished duet's leader.npy is the leader as danced).
+    const leaderKey = Object.keys(files).find((k) => /^leader\.(bvh|fbx|glb|npz|pkl)$/.test(k))
+      ?? (p.system === 'duet' && files['leader.npy'] ? 'leader.npy' : undefined);
+    if (leaderKey) put('leader', await fetchFile(leaderKey, leaderKey));
+    if (p.character && files[p.character]) put('character', await fetchFile(p.character, p.character));
+    const what = STATE_WORDS[job.state] ?? job.state;
+    showNotice(`The settings and files of that ${what} dance are filled in: change what you need, then press Make the dance.`, 'info');
+  } catch (e) {
+    showNotice(`The form could not be filled in from that dance: ${e.message}.`);
   }
 }
 
@@ -596,13 +653,15 @@ function showJob(job) {
       break;
     case 'failed':
       document.title = 'dancegen — failed';
-      failJob(`The dance could not be made: ${job.error || 'the server gave no reason'}.`);
+      failJob(`The dance could not be made: ${job.error || 'the server gave no reason'}.`,
+        job.params?.edit ? null : { href: againHref(job.id), text: 'Try again with these settings' });
       status.textContent = 'The dance could not be made.';
       eta.textContent = '';
       break;
     case 'cancelled':
       document.title = 'dancegen — cancelled';
-      failJob(job.error ? `This job was cancelled: ${job.error}` : 'This job was cancelled.');
+      failJob(job.error ? `This job was cancelled: ${job.error}` : 'This job was cancelled.',
+        job.params?.edit ? null : { href: againHref(job.id), text: 'Try again with these settings' });
       status.textContent = 'Cancelled.';
       eta.textContent = '';
       break;

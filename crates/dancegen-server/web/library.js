@@ -6,7 +6,12 @@
  */
 
 const SYSTEM_WORDS = { solo: 'Solo', duet: 'Duet', group: 'Group', holistic: 'Body, hands and face' };
-const STATE_WORDS = { queued: 'waiting', running: 'being made', done: 'done', failed: 'failed', cancelled: 'cancelled' };
+export const STATE_WORDS = { queued: 'waiting', running: 'being made', done: 'done', failed: 'failed', cancelled: 'cancelled' };
+
+/** The page that reopens the form filled in from job `id` ("Try again"). */
+export function againHref(id) {
+  return `?again=${encodeURIComponent(id)}`;
+}
 
 /** A dance's title in the library: its name, else its song's. */
 export function danceTitle(job) {
@@ -94,7 +99,8 @@ export class Library {
     if (!job.params?.edit && job.state === 'done') {
       button('again', 'Again with another seed', () => this.again(job, this.nextSeed(job)));
     } else if (!job.params?.edit && (job.state === 'failed' || job.state === 'cancelled')) {
-      button('again', 'Try again', () => this.again(job, undefined));
+      // The form filled in with its settings and files, to change what made it fail.
+      button('again', 'Try again', () => { location.href = againHref(job.id); });
     }
     about.append(title, meta, actions);
     li.append(thumb, about);

@@ -10,8 +10,8 @@
  * Phone (375 × 667, touch): reads the drop zone's words and how wide each dance system's name
  * is against the room its select has. Then the character field (desktop): which systems offer
  * it, <empty_file> refused as a character, and <character.glb> sent with <song>, ending at 4 s
- * (the job's params read back). Screenshots: <out_dir>/phone.png, character-form.png. Prints
- * ONE JSON line:
+ * (the job's params read back). Last, "Try again" from <cancelled_job_id>'s page. Screenshots:
+ * <out_dir>/phone.png, character-form.png, again.png. Prints ONE JSON line:
  *
  *   {"desktop": {"focused": id of the element focused after the tabs, "enter": chooser opened,
  *    "space": chooser opened, "name": the chosen file's line, "notice": the message after
@@ -19,6 +19,9 @@
  *    "phone": {"words": drop zone text, "room": px for the text, "options": [[text, px]]},
  *    "character": {"shownFor": {system: field shown}, "refused": {notice, invalid},
  *                  "params": the params of the job the form made},
+ *    "again": the form filled in from <cancelled_job_id> through its page's "Try again" link:
+ *             {link: {text, href}, url, notice, system, seed, end, rig, variations,
+ *              song: [name, size], songName, character: [name, size]},
  *    "errors": [page errors]}
  *
  * It asserts nothing (the Rust test does) and exits 0, except when the page never shows its
@@ -32,9 +35,9 @@ import { collectErrors, launchChromium } from './chromium.mjs';
 // generating dances on both cores, 3 s was once too short for the first one.
 const CHOOSER_MS = 15_000;
 
-const [baseArg, outDir, emptyFile, songFile, characterFile] = process.argv.slice(2);
-if (!baseArg || !outDir || !emptyFile || !songFile || !characterFile) {
-  console.error('usage: node form_check.mjs <base_url> <out_dir> <empty_file> <song> <character.glb>');
+const [baseArg, outDir, emptyFile, songFile, characterFile, cancelledJob] = process.argv.slice(2);
+if (!baseArg || !outDir || !emptyFile || !songFile || !characterFile || !cancelledJob) {
+  console.error('usage: node form_check.mjs <base_url> <out_dir> <empty_file> <song> <character.glb> <cancelled_job_id>');
   process.exit(2);
 }
 const base = baseArg.replace(/\/+$/, '');
@@ -141,6 +144,34 @@ try {
     if (!id) return { refused: document.getElementById('notice').textContent };
     return (await (await fetch(`api/jobs/${encodeURIComponent(id)}`)).json()).params;
   });
+
+  // "Try again" on a cancelled job: its page links to the form filled in from it, and the
+  // form holds its settings and its files.
+  const retry = await browser.newPage();
+  await retry.setViewport({ width: 1280, height: 900 });
+  collectErrors(retry, errors);
+  await retry.goto(`${base}/?job=${encodeURIComponent(cancelledJob)}`, { waitUntil: 'networkidle0' });
+  await retry.waitForSelector('#notice a', { timeout: 60_000 });
+  const link = await retry.$eval('#notice a', (a) => ({ text: a.textContent, href: a.getAttribute('href') }));
+  await retry.click('#notice a');
+  await retry.waitForFunction(() => document.getElementById('notice').dataset.kind === 'info'
+    || /could not be filled/.test(document.getElementById('notice').textContent), { timeout: 60_000 });
+  result.again = await retry.evaluate(() => {
+    const v = (id) => document.getElementById(id).value;
+    const file = (id) => {
+      const f = document.getElementById(id).files[0];
+      return f ? [f.name, f.size] : null;
+    };
+    return {
+      url: location.search,
+      notice: document.getElementById('notice').textContent,
+      system: v('system'), seed: v('seed'), end: v('end'), rig: v('rig'), variations: v('variations'),
+      song: file('song'), songName: document.getElementById('song-name').textContent,
+      character: file('character'),
+    };
+  });
+  result.again.link = link;
+  await retry.screenshot({ path: join(outDir, 'again.png') });
 } catch (e) {
   console.error(`form_check: ${e.message}`);
   exitCode = 1;

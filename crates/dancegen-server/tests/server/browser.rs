@@ -582,7 +582,8 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
 /// that Enter and Space open the file picker from; an empty file shows as "0 B" and is refused
 /// before upload, naming the field; on a touch screen the zone says "Choose a song", and every
 /// dance system's name fits its drop-down. The character field is offered for solo and
-/// holistic dances, refuses a file that is not a character, and sends the one chosen.
+/// holistic dances, refuses a file that is not a character, and sends the one chosen. "Try
+/// again" on a cancelled job fills the form in with its settings, song and character.
 #[test]
 fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
     check_prerequisites();
@@ -600,6 +601,23 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
         &robot,
     )
     .unwrap();
+    // A cancelled job with the robot, for "Try again".
+    let song_bytes = std::fs::read(&song).unwrap();
+    let robot_bytes = std::fs::read(&robot).unwrap();
+    let r = s.submit(&[
+        (
+            "params",
+            None,
+            br#"{"seed": 5, "end": 6, "rig": "mixamo", "variations": 2}"#,
+        ),
+        ("song", Some("demo.ogg"), &song_bytes),
+        ("character", Some("robot.glb"), &robot_bytes),
+    ]);
+    assert_eq!(r.status, 202, "{}", r.json);
+    let cancelled = r.json["id"].as_str().unwrap().to_string();
+    assert!(s.delete(&format!("/api/jobs/{cancelled}")).status < 300);
+    let job = s.wait(&cancelled, JOB_TIMEOUT);
+    assert_eq!(job["state"], "cancelled", "{job}");
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("form-shots");
     let out = Command::new("node")
         .arg(browser_dir().join("form_check.mjs"))
@@ -608,6 +626,7 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
         .arg(&empty)
         .arg(&song)
         .arg(&robot)
+        .arg(&cancelled)
         .output()
         .expect("this test needs node (Node.js) on the PATH");
     assert!(
@@ -662,6 +681,42 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
     );
     assert_eq!(c["params"]["character"], "character.glb", "{c}");
     assert_eq!(c["params"]["end"], 4.0, "{c}");
+
+    // "Try again" (issue 45): the cancelled job's page links to the form filled in from it.
+    let a = &r["again"];
+    assert_eq!(a["link"]["href"], format!("?again={cancelled}"), "{a}");
+    assert_eq!(a["url"], format!("?again={cancelled}"), "{a}");
+    assert!(
+        a["notice"].as_str().unwrap_or("").contains("filled in"),
+        "{a}"
+    );
+    assert_eq!(
+        (
+            &a["system"],
+            &a["seed"],
+            &a["end"],
+            &a["rig"],
+            &a["variations"]
+        ),
+        (
+            &Value::from("solo"),
+            &Value::from("5"),
+            &Value::from("6"),
+            &Value::from("mixamo"),
+            &Value::from("2")
+        ),
+        "{a}"
+    );
+    assert_eq!(a["song"][1], song_bytes.len(), "the song, whole: {a}");
+    assert_eq!(
+        a["character"][1],
+        robot_bytes.len(),
+        "the character, whole: {a}"
+    );
+    assert!(
+        a["songName"].as_str().unwrap_or("").starts_with("demo.ogg"),
+        "{a}"
+    );
 }
 
 /// "My dances" in the page (issue 45): two finished dances are listed newest first with their
