@@ -119,13 +119,12 @@ fn a_regenerated_range_is_new_for_every_dancer_and_joins_the_kept_frames() {
             q.join_foot_slide_m,
             q.other_foot_slide_m
         );
-        // A new part is at least half as new as another seed of this model makes it. The
-        // solo's bound, half the real pose spread, is out of the group model's reach while
-        // its seeds differ by a few centimetres (issue 43).
+        // New means new (the issue's bound): the new part differs from the original by at
+        // least half the real pose spread (measured 0.102 / 0.087 / 0.096 m).
         assert!(
-            q.new_difference_m >= seeds / 2.0,
-            "dancer {k}: the new part differs by {:.3} m; another seed by {seeds:.3} m (half \
-             the real pose spread: {:.3} m)",
+            q.new_difference_m >= REAL_POSE_SPREAD_M / 2.0,
+            "dancer {k}: the new part differs by {:.3} m, under half the real pose spread \
+             ({:.3} m); another seed differs by {seeds:.3} m",
             q.new_difference_m,
             REAL_POSE_SPREAD_M / 2.0
         );
