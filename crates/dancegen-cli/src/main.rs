@@ -79,8 +79,11 @@ fn init_logging(verbose: u8, quiet: bool) {
     );
     let filter = tracing_subscriber::EnvFilter::try_from_env("DANCEGEN_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(directives));
+    // Colours only on a terminal: a program reading stderr (the Blender add-on, a CI log)
+    // got `\x1b[31mERROR\x1b[0m` around a decoder's words.
     tracing_subscriber::fmt()
         .with_env_filter(filter)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_writer(std::io::stderr)
         .with_target(false)
         .without_time()
