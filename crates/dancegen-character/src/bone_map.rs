@@ -489,6 +489,33 @@ fn find_limb(
                     })
             })
             .or_else(|| {
+                // Nothing marks where the lower limb ends: an exporter that writes no leaf
+                // bones (Blender's glTF exporter; the robot exported again from Blender lost
+                // its `LowerLeg.L_end`). An IK-style end named for this limb counts when the
+                // limb runs on nearly straight to it at rest (the hip-to-foot distance is
+                // within [`STRAIGHT_AT_REST`] of thigh plus knee-to-foot) and it is no
+                // farther from the knee than twice the thigh: the robot's shin is 1.5 thighs.
+                if end_point(tree, l).is_some() {
+                    return None;
+                }
+                let (pu, pl) = (tree.rest_position(u), tree.rest_position(l));
+                let upper = norm(sub(pl, pu));
+                ends.iter()
+                    .copied()
+                    .find(|&e| {
+                        let pe = tree.rest_position(e);
+                        let lower = norm(sub(pe, pl));
+                        !tree.is_ancestor(e, l)
+                            && !tree.is_ancestor(u, e)
+                            && lower <= 2.0 * upper
+                            && norm(sub(pe, pu)) >= STRAIGHT_AT_REST * (upper + lower)
+                    })
+                    .map(|node| End::Bone {
+                        node,
+                        detached: true,
+                    })
+            })
+            .or_else(|| {
                 let kids: Vec<usize> = tree.children[l]
                     .iter()
                     .copied()
@@ -516,6 +543,11 @@ fn find_limb(
 /// feet exactly at the shin ends, 10 % leaves room for rounding and small offsets without ever
 /// reaching the next joint.
 const DETACHED_TOLERANCE: f64 = 0.1;
+
+/// How straight a limb with no marked end must be at rest for an IK-style end to count as
+/// its end (upper-to-end distance over the sum of the two segments): a T- or A-pose limb is
+/// straight (the robot's legs: 0.98), a bent one is not taken for one.
+const STRAIGHT_AT_REST: f64 = 0.9;
 
 /// Rest world position of [`Site::EndOf`]`(k)`; `None` for a node without child nodes.
 pub(crate) fn end_point(tree: &NodeTree, k: usize) -> Option<[f64; 3]> {
