@@ -17,34 +17,13 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{dancegen, ok, shared};
+use common::{blender, dancegen, ok, shared};
 use serde_json::Value;
 
 /// Tolerances of the issue: BVH is text with 6 decimals in centimetres; GLB and FBX are
 /// binary floats.
 const BVH_TOLERANCE_M: f64 = 1e-4;
 const BINARY_TOLERANCE_M: f64 = 1e-5;
-
-fn blender() -> Option<PathBuf> {
-    let found = std::env::var_os("DANCEGEN_BLENDER")
-        .map(PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("PATH").and_then(|paths| {
-                std::env::split_paths(&paths)
-                    .map(|d| d.join("blender"))
-                    .find(|p| p.is_file())
-            })
-        });
-    if found.is_none() {
-        assert!(
-            std::env::var("DANCEGEN_REQUIRE_BLENDER").as_deref() != Ok("1"),
-            "DANCEGEN_REQUIRE_BLENDER=1 but no blender on PATH (apt-get install blender \
-             python3-numpy, or set DANCEGEN_BLENDER)"
-        );
-        eprintln!("skipped: no blender on PATH (tools/test.sh installs it)");
-    }
-    found
-}
 
 fn script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/import_report.py")

@@ -33,3 +33,27 @@ pub fn stderr(o: &Output) -> String {
 pub fn ok(o: &Output) {
     assert!(o.status.success(), "{}", stderr(o));
 }
+
+/// Blender (`DANCEGEN_BLENDER`, else `blender` on PATH), for the real-client tests. Without it
+/// they say so and pass, unless `DANCEGEN_REQUIRE_BLENDER=1` (`tools/test.sh` sets it after
+/// installing Blender), where they fail.
+pub fn blender() -> Option<PathBuf> {
+    let found = std::env::var_os("DANCEGEN_BLENDER")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("PATH").and_then(|paths| {
+                std::env::split_paths(&paths)
+                    .map(|d| d.join("blender"))
+                    .find(|p| p.is_file())
+            })
+        });
+    if found.is_none() {
+        assert!(
+            std::env::var("DANCEGEN_REQUIRE_BLENDER").as_deref() != Ok("1"),
+            "DANCEGEN_REQUIRE_BLENDER=1 but no blender on PATH (apt-get install blender \
+             python3-numpy, or set DANCEGEN_BLENDER)"
+        );
+        eprintln!("skipped: no blender on PATH (tools/test.sh installs it)");
+    }
+    found
+}
