@@ -6,13 +6,13 @@ mod cmd_beats;
 mod cmd_bundle;
 mod cmd_convert;
 mod cmd_dataset;
+mod cmd_eval;
 mod cmd_features;
 mod cmd_generate;
 mod cmd_models;
 mod cmd_render;
 mod cmd_serve;
 mod cmd_train;
-mod eval;
 mod plot;
 mod progress;
 
@@ -32,7 +32,7 @@ fn main() -> std::process::ExitCode {
         cli::Command::Beats(args) => cmd_beats::run(args, cli.quiet),
         cli::Command::Convert(args) => cmd_convert::run(args, cli.quiet),
         cli::Command::Render(args) => cmd_render::run(args, cli.quiet),
-        cli::Command::Eval(args) => eval::run(args, cli.quiet),
+        cli::Command::Eval(args) => cmd_eval::run(args),
         cli::Command::Train(args) => cmd_train::run(args, cli.quiet),
         cli::Command::Dataset(cmd) => cmd_dataset::run(cmd, cli.quiet),
         cli::Command::Generate(args) => cmd_generate::run(args, cli.quiet),

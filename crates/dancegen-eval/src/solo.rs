@@ -9,7 +9,7 @@ use dancegen_metrics::foot_skating_duration::SkatingDuration;
 use dancegen_metrics::protocol::{Prepared, Protocol};
 
 use super::input::Clip;
-use crate::cli::EvalArgs;
+use crate::EvalOptions;
 
 /// Kinetic (`k`) or geometric (`g`) features of every dancer of every clip, stored as float32
 /// as the references do.
@@ -165,7 +165,7 @@ pub fn clip_beat_counts(
 
 /// Music-beat frame indices from `--beats` (`.npy` of indices, or a 35-dim feature file whose
 /// last column is the beat flag) or `--music` (computed at the clips' frame rate).
-pub fn music_beats(args: &EvalArgs, clips: &[Clip]) -> Result<Vec<usize>> {
+pub fn music_beats(args: &EvalOptions, clips: &[Clip]) -> Result<Vec<usize>> {
     if let Some(path) = &args.beats {
         let a = dancegen_io::read_npy(path).with_context(|| format!("{}", path.display()))?;
         if let Some(v) = a.data.iter().find(|v| !v.is_finite()) {

@@ -1,4 +1,9 @@
-//! `dancegen eval`: dance metrics of generated motion (and ground truth) under a paper's protocol.
+//! Dance metrics of generated motion (and ground truth) under a paper's protocol, over files:
+//! what `dancegen eval` computes ([`evaluate`]), for every front end (the CLI prints it as a
+//! table and writes it as `--json`; the Python package returns it as a dict). The metrics
+//! themselves are `dancegen_metrics`' (pure functions of arrays); this crate reads the clips,
+//! pairs them, chooses the metrics the inputs allow and assembles the report. Options are named
+//! as `dancegen eval`'s flags, and errors say the flag (`--gt`).
 //!
 //! Inputs are clips: a solo clip is one dancer; a group scene (`(N, T, 24, 3)` `.npy` or a group
 //! motion file) holds `N` dancers of equal length.
@@ -35,7 +40,7 @@ mod genre;
 mod group;
 mod input;
 mod physical;
-mod report;
+pub mod report;
 mod solo;
 
 use std::collections::BTreeMap;
@@ -46,8 +51,9 @@ use dancegen_metrics::fid::EPS_BAILANDO;
 use dancegen_metrics::{diversity, frechet_distance, normalize_by_gt};
 use serde_json::{Value, json};
 
-use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
+use dancegen_metrics::protocol::Protocol;
 use input::Clip;
+use std::path::PathBuf;
 
 /// The metrics `eval` knew before the physical figures ([`all_metrics`] adds them), in table
 /// order (names are a contract: external checks read them).
@@ -159,7 +165,7 @@ impl Offer {
     }
 
     /// Whether `m` is computed when `--metrics` is not given.
-    fn default_on(&self, m: &str, args: &EvalArgs) -> bool {
+    fn default_on(&self, m: &str, args: &EvalOptions) -> bool {
         match m {
             // Duet metrics by default only when leaders are given: a two-dancer scene is a group
             // unless the user asks for duet metrics.
@@ -205,19 +211,102 @@ fn parse_metric_list(list: &str) -> Result<Option<Vec<String>>> {
     Ok(Some(out))
 }
 
-pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
-    let protocol = match args.protocol {
-        ProtocolArg::AistppBailando => dancegen_metrics::protocol::AISTPP_BAILANDO,
-        ProtocolArg::FinedanceLodge => dancegen_metrics::protocol::FINEDANCE_LODGE,
-        ProtocolArg::Edge5s => dancegen_metrics::protocol::EDGE_5S,
-        ProtocolArg::None => dancegen_metrics::protocol::NONE,
-    };
-    let variant = match args.bas_variant {
-        BasVariantArg::Bailando => Variant::Bailando,
-        BasVariantArg::Lodge => Variant::Lodge,
-        BasVariantArg::Fact => Variant::Fact,
-        BasVariantArg::Gcd => Variant::Gcd,
-    };
+/// What to evaluate and how: `dancegen eval`'s flags, with its defaults in [`Default`].
+#[derive(Clone, Debug)]
+pub struct EvalOptions {
+    /// Generated clips: files or folders (`--pred`).
+    pub pred: Vec<PathBuf>,
+    /// Ground-truth clips (`--gt`).
+    pub gt: Vec<PathBuf>,
+    /// The leaders of duet `pred` clips, paired by file stem (`--leader`).
+    pub leader: Vec<PathBuf>,
+    /// The leaders of duet `gt` clips (`--gt-leader`).
+    pub gt_leader: Vec<PathBuf>,
+    /// The paper's protocol (`--protocol`).
+    pub protocol: Protocol,
+    /// Frame rate of `.npy` clips without one (`--fps`).
+    pub fps: Option<f64>,
+    /// The true frame rate of the clips, when their files say another (`--source-fps`).
+    pub source_fps: Option<f64>,
+    /// Comma-separated metric names, `physical` or `all` (`--metrics`; `None`: every metric
+    /// the inputs allow).
+    pub metrics: Option<String>,
+    /// The data set manifest giving each `gt` clip's genre (`--gt-genres`).
+    pub gt_genres: Option<PathBuf>,
+    /// The genre the `pred` dances were asked for (`--want-genre`).
+    pub want_genre: Option<String>,
+    /// Fewest `gt` clips a genre needs to be classified (`--genre-min-clips`).
+    pub genre_min_clips: u64,
+    /// BAS variant (`--bas-variant`).
+    pub bas_variant: Variant,
+    /// Music beat frames, one per line (`--beats`).
+    pub beats: Option<PathBuf>,
+    /// The song, whose beats are found (`--music`).
+    pub music: Option<PathBuf>,
+    /// Frames between the boundaries `boundary_jerk` measures (`--window`).
+    pub window: u64,
+}
+
+impl Default for EvalOptions {
+    /// `dancegen eval`'s defaults: no clips, protocol `none`, every metric the inputs allow,
+    /// BAS as Bailando computes it, genres of any size, 150-frame windows.
+    fn default() -> Self {
+        EvalOptions {
+            pred: Vec::new(),
+            gt: Vec::new(),
+            leader: Vec::new(),
+            gt_leader: Vec::new(),
+            protocol: dancegen_metrics::protocol::NONE,
+            fps: None,
+            source_fps: None,
+            metrics: None,
+            gt_genres: None,
+            want_genre: None,
+            genre_min_clips: 1,
+            bas_variant: Variant::Bailando,
+            beats: None,
+            music: None,
+            window: DEFAULT_WINDOW,
+        }
+    }
+}
+
+/// Frames between the boundaries `boundary_jerk` measures by default: EDGE's 5-second windows
+/// at 30 fps.
+pub const DEFAULT_WINDOW: u64 = 150;
+
+/// The result of [`evaluate`]: every set value by metric name (`bas_gt`, `div_k_gt` … beside
+/// them), each clip's values, and the protocol. [`Report::to_json`] is `dancegen eval
+/// --json`'s object.
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub summary: BTreeMap<String, Value>,
+    pub per_clip: Vec<Value>,
+    pub protocol: Protocol,
+    /// Clips read: generated, ground truth.
+    pub pred_clips: usize,
+    pub gt_clips: usize,
+}
+
+impl Report {
+    /// One object: the metric names as keys, `protocol`, and `per_clip`.
+    pub fn to_json(&self) -> Value {
+        let mut obj = serde_json::Map::new();
+        for (k, v) in &self.summary {
+            obj.insert(k.clone(), v.clone());
+        }
+        obj.insert("protocol".into(), json!(self.protocol.name));
+        obj.insert("per_clip".into(), Value::Array(self.per_clip.clone()));
+        Value::Object(obj)
+    }
+}
+
+/// Reads the clips `opts` names and computes the metrics (those asked for, else every one the
+/// inputs allow). Errors name the flag and the file.
+pub fn evaluate(opts: &EvalOptions) -> Result<Report> {
+    let args = opts;
+    let protocol = opts.protocol;
+    let variant = opts.bas_variant;
     // Unknown names fail before any file is read.
     let requested = args
         .metrics
@@ -432,11 +521,13 @@ pub fn run(args: &EvalArgs, _quiet: bool) -> Result<()> {
         summary.insert("bas_gt".into(), mean(&vals).map_or(Value::Null, num));
     }
 
-    report::print_table(&summary, &protocol, pred.len(), gt.len());
-    if let Some(out) = &args.json {
-        report::write_json(out, &summary, &protocol, per_clip)?;
-    }
-    Ok(())
+    Ok(Report {
+        summary,
+        per_clip,
+        protocol,
+        pred_clips: pred.len(),
+        gt_clips: gt.len(),
+    })
 }
 
 /// FID (needs GT) and diversity of one feature kind. With GT, both sets are normalised by the
