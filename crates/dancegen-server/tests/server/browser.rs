@@ -181,8 +181,8 @@ fn check_controls(report: &Value, name: &str) {
 /// What the viewer draws besides the skinned bodies (issue 45), at 1 s of the first variation:
 /// a head over every dancer's head joint, a contact shadow on the floor under every dancer's
 /// supporting feet (the mean floor position of the scene's joints within 5 cm of its lowest one,
-/// read at the same moment; paler the higher that joint), and in a duet the legend naming the
-/// given leader and the generated partner.
+/// read at the same moment; paler the higher that joint), and the legend: in a duet naming the
+/// given leader and the generated partner, in a group each dancer by number.
 fn check_figures(report: &Value, name: &str, dancers: usize) {
     let f = &report["figures"][0];
     let arr = |k: &str| {
@@ -227,6 +227,9 @@ fn check_figures(report: &Value, name: &str, dancers: usize) {
             ["Leader (given)", "Partner (generated)"],
             "{name}: {f}"
         );
+    } else if name == "group" {
+        let want: Vec<String> = (1..=dancers).map(|d| format!("Dancer {d}")).collect();
+        assert_eq!(legend, want, "{name}: {f}");
     } else {
         assert!(
             legend.is_empty(),
@@ -896,4 +899,26 @@ fn a_job_made_with_my_character_shows_it_dancing() {
     );
     assert_eq!(report["views"]["front"]["headInView"], true, "{report}");
     assert_eq!(report["views"]["front"]["headSpheres"], 0, "{report}");
+}
+
+/// A group in the viewer (issue 45): three figures, each with a head and a contact shadow under
+/// its own supporting feet, the legend "Dancer 1" to "Dancer 3", the camera following the
+/// group with every joint in the picture, and no page error.
+#[test]
+fn a_group_is_shown_dancer_by_dancer() {
+    check_prerequisites();
+    let s = start(Limits::default());
+    let base = s.server.url();
+    let r = s.submit_song(
+        &demo_song(),
+        r#"{"system": "group", "dancers": 3, "seed": 1, "end": 6}"#,
+    );
+    assert_eq!(r.status, 202, "{}", r.json);
+    let id = r.json["id"].as_str().unwrap();
+    let job = s.wait(id, JOB_TIMEOUT);
+    assert_eq!(job["state"], "done", "{job}");
+    let report = view(&s, id, "group");
+    check_page(&report, &base, "group");
+    check_follow(&report, "group");
+    check_figures(&report, "group", 3);
 }
