@@ -890,6 +890,34 @@ mod tests {
         json!({"nodes": nodes, "skins": [{"joints": (0..names.len()).collect::<Vec<_>>()}]})
     }
 
+    /// [`mixamo`] with the left foot taken out of the leg (an IK-style foot, a root node at
+    /// world position `at`) and so no bone under the left shin: as Blender's glTF exporter
+    /// writes the robot's legs.
+    fn with_detached_left_foot(at: [f64; 3]) -> Value {
+        let mut doc = mixamo();
+        let nodes = doc["nodes"].as_array_mut().unwrap();
+        nodes[15]["children"] = json!([]);
+        nodes[16]["translation"] = json!(at);
+        doc
+    }
+
+    #[test]
+    fn an_ik_foot_ends_a_leg_with_no_bone_below_the_shin_when_the_leg_runs_straight_to_it() {
+        // Hip at (0.1, 0.95, 0), knee 0.4 below it: the foot 0.4 below the knee, in line.
+        let doc = with_detached_left_foot([0.1, 0.15, 0.0]);
+        let tree = NodeTree::from_json(&doc).unwrap();
+        let m = match_bones(&doc, &tree).unwrap();
+        assert_eq!(m.node_for(smpl::ANKLE[0]), Some(16));
+        let foot = m.bones.iter().find(|b| b.node == 16).unwrap();
+        assert_eq!(foot.detached_from, Some(15), "moved with the shin");
+        // The same foot 0.4 m out to the side of the knee: the leg is bent 90 degrees at rest
+        // (hip to foot 0.57 m against 0.8 m of segments), so it is not taken for the leg's end.
+        let doc = with_detached_left_foot([0.5, 0.55, 0.0]);
+        let tree = NodeTree::from_json(&doc).unwrap();
+        let missing = match_bones(&doc, &tree).unwrap_err();
+        assert!(missing.iter().any(|m| m.contains("lankle")), "{missing:?}");
+    }
+
     #[test]
     fn maps_mixamo_by_names_and_hierarchy() {
         let doc = mixamo();
