@@ -174,13 +174,15 @@ fn the_addon_dances_on_the_selected_armature_and_says_what_went_wrong() {
     // The user's own robot dances: the scene holds what it held, and the dancing copy
     // dancegen made is gone.
     assert_eq!(r["objects_after"], r["objects_before"], "{r}");
-    // The robot moves: its head at 0 s and 3 s.
+    // The robot moves: its head at 0 s and 3 s (measured 1.06 m apart; a robot left in its
+    // rest pose, the action not applied, would not move at all).
     let head = |t: &str| a["heads"][t]["Head"].as_array().unwrap().clone();
     let moved = (0..3)
         .map(|k| (head("0")[k].as_f64().unwrap() - head("3")[k].as_f64().unwrap()).powi(2))
         .sum::<f64>()
         .sqrt();
-    assert!(moved > 0.01, "the robot's head moved {moved} m");
+    eprintln!("add-on character: the robot's head moved {moved:.3} m from 0 s to 3 s");
+    assert!(moved > 0.1, "the robot's head moved {moved} m");
 
     let notes = dir.path().join("notes.mp3");
     std::fs::write(&notes, "not a song\n").unwrap();
