@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test command (README, .ci/run): installs what the tests need, then runs
-# `cargo test --workspace --locked` (extra arguments are passed on to it).
+# `cargo test --workspace --locked` (extra arguments are passed on to it) and the Python
+# package's pytest tests.
 #
 # The tests need, beyond Rust:
 #   - libsoxr-dev + pkg-config: the music crate links libsoxr (librosa's resampler);
@@ -72,4 +73,24 @@ if [ "${free_gb:-0}" -lt 20 ]; then
 fi
 # Installed above, so the Blender test must run (without this it skips where Blender is absent).
 export DANCEGEN_REQUIRE_BLENDER=1
-exec cargo test --workspace --locked "$@"
+status=0
+cargo test --workspace --locked "$@" || status=$?
+
+# The Python package (crates/dancegen-py): built with maturin into a venv in the target
+# directory (maturin, numpy and pytest pinned in its tests/requirements.txt, from PyPI), then
+# its pytest tests, which compare it with the dancegen binary the cargo tests built.
+venv="$target_dir/py-venv"
+py_status=0
+# (`set -e` does not stop a command list on the left of `||`: each step is chained with &&.)
+{ [ -x "$venv/bin/python" ] || python3 -m venv "$venv"; } &&
+  "$venv/bin/pip" install -q -r crates/dancegen-py/tests/requirements.txt &&
+  VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" CARGO_TARGET_DIR="$target_dir" \
+    "$venv/bin/maturin" develop -q -m crates/dancegen-py/Cargo.toml &&
+  DANCEGEN_BIN="$(cd "$target_dir" && pwd)/debug/dancegen" \
+    "$venv/bin/python" -m pytest -q -p no:cacheprovider crates/dancegen-py/tests ||
+  py_status=$?
+if [ "$py_status" -ne 0 ]; then
+  echo "tools/test.sh: the Python package's build or tests failed (exit $py_status)" >&2
+fi
+[ "$status" -ne 0 ] && exit "$status"
+exit "$py_status"

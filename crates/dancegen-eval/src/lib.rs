@@ -271,6 +271,32 @@ impl Default for EvalOptions {
     }
 }
 
+/// The protocol `dancegen eval --protocol` names `name`: `aistpp-bailando`, `finedance-lodge`,
+/// `edge-5s` or `none`.
+pub fn protocol_named(name: &str) -> Result<Protocol> {
+    Ok(match name {
+        "aistpp-bailando" => dancegen_metrics::protocol::AISTPP_BAILANDO,
+        "finedance-lodge" => dancegen_metrics::protocol::FINEDANCE_LODGE,
+        "edge-5s" => dancegen_metrics::protocol::EDGE_5S,
+        "none" => dancegen_metrics::protocol::NONE,
+        other => {
+            bail!("protocol '{other}': choose aistpp-bailando, finedance-lodge, edge-5s or none")
+        }
+    })
+}
+
+/// The BAS variant `dancegen eval --bas-variant` names `name`: `bailando`, `lodge`, `fact` or
+/// `gcd`.
+pub fn bas_variant_named(name: &str) -> Result<Variant> {
+    Ok(match name {
+        "bailando" => Variant::Bailando,
+        "lodge" => Variant::Lodge,
+        "fact" => Variant::Fact,
+        "gcd" => Variant::Gcd,
+        other => bail!("bas variant '{other}': choose bailando, lodge, fact or gcd"),
+    })
+}
+
 /// Frames between the boundaries `boundary_jerk` measures by default: EDGE's 5-second windows
 /// at 30 fps.
 pub const DEFAULT_WINDOW: u64 = 150;
