@@ -2,8 +2,8 @@
 //! table and, with `--json`, written as one object.
 
 use anyhow::Result;
-use dancegen_eval::EvalOptions;
 use dancegen_eval::report::{print_table, write_json};
+use dancegen_eval::{EvalOptions, Input};
 use dancegen_metrics::bas::Variant;
 
 use crate::cli::{BasVariantArg, EvalArgs, ProtocolArg};
@@ -19,10 +19,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
 
 fn options(args: &EvalArgs) -> EvalOptions {
     EvalOptions {
-        pred: args.pred.clone(),
-        gt: args.gt.clone(),
-        leader: args.leader.clone(),
-        gt_leader: args.gt_leader.clone(),
+        pred: paths(&args.pred),
+        gt: paths(&args.gt),
+        leader: paths(&args.leader),
+        gt_leader: paths(&args.gt_leader),
         protocol: match args.protocol {
             ProtocolArg::AistppBailando => dancegen_metrics::protocol::AISTPP_BAILANDO,
             ProtocolArg::FinedanceLodge => dancegen_metrics::protocol::FINEDANCE_LODGE,
@@ -42,7 +42,12 @@ fn options(args: &EvalArgs) -> EvalOptions {
             BasVariantArg::Gcd => Variant::Gcd,
         },
         beats: args.beats.clone(),
+        beat_frames: None,
         music: args.music.clone(),
         window: args.window,
     }
+}
+
+fn paths(p: &[std::path::PathBuf]) -> Vec<Input> {
+    p.iter().cloned().map(Input::Path).collect()
 }

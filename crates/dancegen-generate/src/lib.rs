@@ -31,6 +31,7 @@
 pub mod beat_align;
 pub mod edit;
 pub mod error;
+pub mod flags;
 pub mod formation_file;
 pub mod generator;
 pub mod models;
@@ -44,7 +45,7 @@ pub mod systems;
 pub mod time_plan;
 
 pub use error::GenerateError;
-pub use generator::{Generated, Generator, Timings};
+pub use generator::{Generated, Generator, KeptDance, Timings};
 pub use models::ModelLocator;
 pub use progress::{CancelToken, Progress};
 pub use request::{Request, Song, SystemRequest};

@@ -9,23 +9,10 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use clap::{CommandFactory, FromArgMatches};
 use serde_json::{Map, Value};
 
-use crate::cli::GenerateArgs;
+use dancegen_generate::flags::GenerateFlags;
 
-/// Keys holding a path: resolved against the manifest's folder (see [`resolve`]).
-const PATH_KEYS: [&str; 9] = [
-    "song",
-    "leader",
-    "formation",
-    "model",
-    "character",
-    "edit",
-    "continue-from",
-    "from",
-    "path",
-];
 /// `generate` options a batch decides itself.
 const RESERVED_KEYS: [&str; 3] = ["output", "o", "progress"];
 
@@ -180,69 +167,15 @@ fn take_outputs(fields: &mut Map<String, Value>) -> Result<Vec<String>, String> 
     Ok(names)
 }
 
-/// `generate`'s argument list for a line's remaining keys (the song last, after `--`).
+/// `generate`'s argument list for a line's remaining keys (the song last, after `--`); paths
+/// resolved against the manifest's folder.
 fn generate_args(fields: &Map<String, Value>, base: &Path) -> Result<Vec<String>, String> {
-    let command = GenerateCommand::command();
-    let mut args = Vec::new();
-    let mut song = None;
-    for (key, value) in fields {
-        let name = key.replace('_', "-");
-        if RESERVED_KEYS.contains(&name.as_str()) {
-            return Err(format!(
-                "\"{key}\" is set by the batch (list file names in \"outputs\")"
-            ));
-        }
-        if name == "song" {
-            match value {
-                Value::String(s) => song = Some(resolve(base, s)?),
-                Value::Null => {}
-                other => return Err(format!("\"song\" must be a path, not {other}")),
-            }
-            continue;
-        }
-        let Some(arg) = command
-            .get_arguments()
-            .find(|a| a.get_long() == Some(name.as_str()))
-        else {
-            return Err(format!(
-                "unknown option \"{key}\" (`dancegen generate` has no --{name})"
-            ));
-        };
-        let takes_value = arg.get_action().takes_values();
-        let is_path = PATH_KEYS.contains(&name.as_str());
-        let values: Vec<&Value> = match value {
-            Value::Array(items) if takes_value => items.iter().collect(),
-            Value::Null => continue,
-            v => vec![v],
-        };
-        for v in values {
-            let text = match (v, takes_value) {
-                (Value::Bool(true), false) => {
-                    args.push(format!("--{name}"));
-                    continue;
-                }
-                (Value::Bool(false), false) => continue,
-                (_, false) => return Err(format!("\"{key}\" is a switch: give true or false")),
-                (Value::String(s), true) if is_path => resolve(base, s)?,
-                // POSE[:N]@T: the pose file is a path.
-                (Value::String(s), true) if name == "keyframe" => {
-                    let (pose, frame, t) = dancegen_generate::edit::parse_keyframe_spec(s)?;
-                    let pose = resolve(base, &pose.display().to_string())?;
-                    format!("{pose}:{frame}@{t}")
-                }
-                (Value::String(s), true) => s.clone(),
-                (Value::Number(n), true) => n.to_string(),
-                (other, true) => return Err(format!("\"{key}\": {other} is not a value")),
-            };
-            // `--name=value`, so a value starting with '-' is not read as an option.
-            args.push(format!("--{name}={text}"));
-        }
-    }
-    if let Some(song) = song {
-        args.push("--".into());
-        args.push(song);
-    }
-    Ok(args)
+    dancegen_generate::flags::args_from_named(
+        fields,
+        &RESERVED_KEYS,
+        "is set by the batch (list file names in \"outputs\")",
+        &|path| resolve(base, path),
+    )
 }
 
 /// A path from the manifest: relative paths are taken from the manifest's folder, or, when
@@ -269,31 +202,9 @@ fn resolve(base: &Path, path: &str) -> Result<String, String> {
     }
 }
 
-/// `generate`'s arguments alone, for clap.
-#[derive(clap::Parser, Debug)]
-#[command(name = "generate", no_binary_name = true)]
-struct GenerateCommand {
-    #[command(flatten)]
-    args: GenerateArgs,
-}
-
 /// Parses an argument list as `dancegen generate` would.
-pub fn parse_generate_args(args: &[String]) -> Result<GenerateArgs, String> {
-    let matches = GenerateCommand::command()
-        .try_get_matches_from(args)
-        .map_err(|e| clap_message(&e.to_string()))?;
-    GenerateCommand::from_arg_matches(&matches)
-        .map(|c| c.args)
-        .map_err(|e| clap_message(&e.to_string()))
-}
-
-/// clap's message on one line, without its usage and help hints.
-fn clap_message(s: &str) -> String {
-    s.lines()
-        .take_while(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
-        .map(|l| l.trim().trim_start_matches("error: "))
-        .collect::<Vec<_>>()
-        .join(" ")
+pub fn parse_generate_args(args: &[String]) -> Result<GenerateFlags, String> {
+    dancegen_generate::flags::parse(args)
 }
 
 #[cfg(test)]

@@ -198,7 +198,7 @@ fn try_entry(generator: &Generator, entry: &Entry, out: &Path) -> Result<SongRes
     let started = Instant::now();
     let command = generate_command(entry, &dir)?;
     let args = manifest::parse_generate_args(&command[2..]).map_err(anyhow::Error::msg)?;
-    let request = crate::cmd_generate::request(&args)?;
+    let request = dancegen_generate::flags::request(&args)?;
     let done = generator.run(&request, &|_| {}, &CancelToken::new())?;
     let outputs: Vec<String> = done
         .written
@@ -251,7 +251,7 @@ fn remove_leftovers(dir: &Path) {
 fn generate_command(entry: &Entry, dir: &Path) -> Result<Vec<String>> {
     let names: Vec<String> = if entry.outputs.is_empty() {
         let args = manifest::parse_generate_args(&entry.args).map_err(anyhow::Error::msg)?;
-        crate::cmd_generate::request(&args)?
+        dancegen_generate::flags::request(&args)?
             .outputs
             .iter()
             .filter_map(|o| o.path.file_name())

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use dancegen_formats::rig::Rig;
 
-use super::value_parsers::{parse_rig, parse_source_fps};
+use dancegen_generate::flags::values::{parse_rig, parse_source_fps};
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NpzStyleArg {

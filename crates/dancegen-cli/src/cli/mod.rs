@@ -13,13 +13,12 @@ mod music;
 mod render;
 mod serve;
 mod train;
-mod value_parsers;
 
 pub use batch::{BatchArgs, Shard};
 pub use convert::{ConvertArgs, NpzStyleArg, TargetSkeleton};
 pub use dataset::{DatasetBuildArgs, DatasetCommand, PairingArg};
 pub use eval::{BasVariantArg, EvalArgs, ProtocolArg};
-pub use generate::{GenerateArgs, ProgressArg, SamplerArg};
+pub use generate::{GenerateArgs, ProgressArg};
 pub use models::{BundleArgs, ModelsArgs, ModelsCommand};
 pub use music::{BeatsArgs, FeaturesArgs, SetArg};
 pub use render::RenderArgs;

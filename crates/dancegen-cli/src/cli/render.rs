@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::value_parsers::parse_source_fps;
+use dancegen_generate::flags::values::parse_source_fps;
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {

@@ -1,9 +1,10 @@
-//! Value parsers several commands share: a capture rate and a rig name.
+//! Value parsers of options several commands share: a capture rate, a rig name and a range of
+//! seconds (the CLI's `convert`, `eval` and `render` use them too).
 
 use dancegen_formats::rig::Rig;
 
 /// `--source-fps N` / `--leader-fps N`: a capture rate in (0, 1000].
-pub(crate) fn parse_source_fps(s: &str) -> Result<f64, String> {
+pub fn parse_source_fps(s: &str) -> Result<f64, String> {
     let fps: f64 = s
         .trim()
         .parse()
@@ -12,12 +13,12 @@ pub(crate) fn parse_source_fps(s: &str) -> Result<f64, String> {
 }
 
 /// `--rig NAME`, with the presets listed when the name is unknown.
-pub(crate) fn parse_rig(s: &str) -> Result<Rig, String> {
+pub fn parse_rig(s: &str) -> Result<Rig, String> {
     Rig::from_name(s).map_err(|e| e.to_string())
 }
 
 /// `--regenerate A-B`: two times in seconds, `A < B`.
-pub(crate) fn parse_range(s: &str) -> Result<[f64; 2], String> {
+pub fn parse_range(s: &str) -> Result<[f64; 2], String> {
     let bad = || format!("{s:?} is not a range of seconds START-END, e.g. 8-12.5");
     let (a, b) = s.trim().split_once('-').ok_or_else(bad)?;
     let a: f64 = a.trim().parse().map_err(|_| bad())?;
