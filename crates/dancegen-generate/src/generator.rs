@@ -13,7 +13,7 @@ use crate::models::ModelLocator;
 use crate::output;
 use crate::progress::{CancelToken, Progress, Tracker, stage};
 use crate::record::DanceRecord;
-use crate::request::{Request, Song, SystemRequest};
+use crate::request::{OutputRequest, Request, Song, SystemRequest};
 use crate::song::{AnalysedSong, FPS};
 use crate::system::{Dance, DanceInput, DanceSystem, Dancer};
 use crate::systems::duet::Duet;
@@ -61,6 +61,59 @@ pub struct Generated {
     pub timings: Timings,
     /// Files written, in request order.
     pub written: Vec<PathBuf>,
+    /// The dance itself, kept to write more outputs later, when the job asked for it
+    /// ([`Generator::run_keeping`]).
+    pub kept: Option<Arc<KeptDance>>,
+}
+
+/// A finished dance with its song and record: what writing an output needs, so that an
+/// output written later ([`KeptDance::write`]) is the file the job would have written (the
+/// Python package's `Dance.save`).
+pub struct KeptDance {
+    dance: Dance,
+    song: AnalysedSong,
+    record: DanceRecord,
+    makes_face: bool,
+}
+
+impl std::fmt::Debug for KeptDance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("KeptDance")
+            .field("record", &self.record)
+            .finish_non_exhaustive()
+    }
+}
+
+impl KeptDance {
+    /// Writes `outputs` as the job that made the dance would have (staged, then renamed into
+    /// place; nothing is left of a failed write).
+    pub fn write(&self, outputs: &[OutputRequest]) -> Result<Vec<PathBuf>, GenerateError> {
+        let planned = output::plan(outputs, self.makes_face)?;
+        let plan = vec![(stage::WRITE_OUTPUTS, output::estimated_seconds(&planned))];
+        let cancel = CancelToken::new();
+        let tracker = Tracker::new(plan, &|_: &Progress| {}, &cancel);
+        tracker.begin(stage::WRITE_OUTPUTS)?;
+        output::write_all(&planned, &self.dance, &self.song, &self.record, &tracker)
+    }
+
+    /// The array the `.npy` output holds (`(T, J, 3)`, or `(N, T, 24, 3)` for a group) as
+    /// `(shape, values)`. The `.npy` writer is the one definition of that array, so it is
+    /// written to a temporary folder and read back.
+    pub fn joints(&self) -> Result<(Vec<usize>, Vec<f32>), GenerateError> {
+        let dir = tempfile::tempdir().map_err(|e| GenerateError::Output {
+            path: std::env::temp_dir(),
+            reason: format!("cannot create a temporary folder: {e}"),
+        })?;
+        let path = dir.path().join("joints.npy");
+        self.write(&[OutputRequest::new(&path)])?;
+        let bad = |reason: String| GenerateError::Output {
+            path: path.clone(),
+            reason,
+        };
+        let a = dancegen_io::read_npy(&path).map_err(|e| bad(e.to_string()))?;
+        // float32 values widened to f64 by the reader: narrowing them back is exact.
+        Ok((a.shape, a.data.into_iter().map(|v| v as f32).collect()))
+    }
 }
 
 /// Runs generation jobs. Long-running front ends (the web server, batch runs) keep one and
@@ -98,13 +151,33 @@ impl Generator {
         on_progress: &(dyn Fn(&Progress) + Sync),
         cancel: &CancelToken,
     ) -> Result<Generated, GenerateError> {
+        self.run_with(request, on_progress, cancel, false)
+    }
+
+    /// [`Generator::run`], keeping the dance in [`Generated::kept`] to write more outputs
+    /// later.
+    pub fn run_keeping(
+        &self,
+        request: &Request,
+        on_progress: &(dyn Fn(&Progress) + Sync),
+        cancel: &CancelToken,
+    ) -> Result<Generated, GenerateError> {
+        self.run_with(request, on_progress, cancel, true)
+    }
+
+    fn run_with(
+        &self,
+        request: &Request,
+        on_progress: &(dyn Fn(&Progress) + Sync),
+        cancel: &CancelToken,
+        keep: bool,
+    ) -> Result<Generated, GenerateError> {
+        let (r, p, c, k) = (request, on_progress, cancel, keep);
         match &request.system {
-            SystemRequest::Solo(o) => self.run_system::<Solo>(request, o, on_progress, cancel),
-            SystemRequest::Duet(o) => self.run_system::<Duet>(request, o, on_progress, cancel),
-            SystemRequest::Group(o) => self.run_system::<Group>(request, o, on_progress, cancel),
-            SystemRequest::Holistic(o) => {
-                self.run_system::<Holistic>(request, o, on_progress, cancel)
-            }
+            SystemRequest::Solo(o) => self.run_system::<Solo>(r, o, p, c, k),
+            SystemRequest::Duet(o) => self.run_system::<Duet>(r, o, p, c, k),
+            SystemRequest::Group(o) => self.run_system::<Group>(r, o, p, c, k),
+            SystemRequest::Holistic(o) => self.run_system::<Holistic>(r, o, p, c, k),
         }
     }
 
@@ -148,6 +221,7 @@ impl Generator {
         options: &S::Options,
         on_progress: &(dyn Fn(&Progress) + Sync),
         cancel: &CancelToken,
+        keep: bool,
     ) -> Result<Generated, GenerateError> {
         let started = Instant::now();
         if let Some(op) = request
@@ -251,19 +325,35 @@ impl Generator {
         let warnings = beat_warning(beat_times_s.len(), span.start_s, span.end_s)
             .into_iter()
             .collect();
+        let song_label = song.label.clone();
+        let tempo_bpm = song.features.tempo_bpm;
+        let dancers = dance.dancers.clone();
+        let (summary, timing_breakdown, notes) = (
+            dance.summary.clone(),
+            dance.timing_breakdown.clone(),
+            dance.notes.clone(),
+        );
+        let kept = keep.then(|| {
+            Arc::new(KeptDance {
+                dance,
+                song,
+                record,
+                makes_face: request.system.makes_face(),
+            })
+        });
         Ok(Generated {
             system: S::NAME,
             model_dir,
-            song_label: song.label.clone(),
+            song_label,
             fps: FPS,
             start_s: span.start_s,
             end_s: span.end_s,
             beat_times_s,
-            tempo_bpm: song.features.tempo_bpm,
-            dancers: dance.dancers,
-            summary: dance.summary,
-            timing_breakdown: dance.timing_breakdown,
-            notes: dance.notes,
+            tempo_bpm,
+            dancers,
+            summary,
+            timing_breakdown,
+            notes,
             warnings,
             timings: Timings {
                 load_model_s,
@@ -273,6 +363,7 @@ impl Generator {
                 total_s: started.elapsed().as_secs_f64(),
             },
             written,
+            kept,
         })
     }
 }
