@@ -44,11 +44,43 @@ pub fn stem(p: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Motion files of the inputs: files as given, directories expanded (sorted).
-fn collect_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+/// One `--pred` / `--gt` / … input: a file or folder, or a clip already in memory (the
+/// Python package's arrays), read as a `.npy` of the same shape would be.
+#[derive(Clone, Debug)]
+pub enum Input {
+    Path(PathBuf),
+    Array(ClipArray),
+}
+
+impl From<PathBuf> for Input {
+    fn from(p: PathBuf) -> Self {
+        Input::Path(p)
+    }
+}
+
+/// Joint positions in memory: `(T, J, 3)` for one dancer or `(N, T, J, 3)` for a scene, in
+/// C order. `name` stands for the file stem: clips pair by it (`mpjpe`, duet leaders) and it
+/// names the clip in `per_clip` and in errors.
+#[derive(Clone, Debug)]
+pub struct ClipArray {
+    pub name: String,
+    pub shape: Vec<usize>,
+    pub data: Vec<f64>,
+}
+
+/// Motion files of the inputs: files as given, directories expanded (sorted); arrays as
+/// given.
+fn collect_files(inputs: &[Input]) -> Result<Vec<Input>> {
     const EXT: [&str; 4] = ["npy", "pkl", "npz", "bvh"];
     let mut out = Vec::new();
     for input in inputs {
+        let input = match input {
+            Input::Array(a) => {
+                out.push(Input::Array(a.clone()));
+                continue;
+            }
+            Input::Path(p) => p,
+        };
         if input.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(input)
                 .with_context(|| format!("reading {}", input.display()))?
@@ -67,9 +99,9 @@ fn collect_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
                 );
             }
             found.sort();
-            out.extend(found);
+            out.extend(found.into_iter().map(Input::Path));
         } else if input.is_file() {
-            out.push(input.clone());
+            out.push(Input::Path(input.clone()));
         } else {
             bail!("{}: no such file or directory", input.display());
         }
@@ -80,18 +112,43 @@ fn collect_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
 /// Every clip of `inputs`. `fps`: the rate of `.npy` inputs (`--fps`); `source_fps`: the rate
 /// every input was sampled at, whatever its header says (`--source-fps`).
 pub fn load_set(
-    inputs: &[PathBuf],
+    inputs: &[Input],
     protocol: &Protocol,
     fps: Option<f64>,
     source_fps: Option<f64>,
 ) -> Result<Vec<Clip>> {
     collect_files(inputs)?
         .into_iter()
-        .map(|path| {
-            load_clip(&path, protocol, fps, source_fps)
-                .with_context(|| format!("{}", path.display()))
+        .map(|input| match input {
+            Input::Path(path) => load_clip(&path, protocol, fps, source_fps)
+                .with_context(|| format!("{}", path.display())),
+            Input::Array(a) => {
+                let name = a.name.clone();
+                let raw = raw_of_array(a)?;
+                clip_of(PathBuf::from(&name), raw, protocol, fps, source_fps)
+                    .with_context(|| format!("array {name}"))
+            }
         })
         .collect()
+}
+
+/// The dancers of an array, as [`read_raw`] reads a `.npy` of that shape.
+fn raw_of_array(a: ClipArray) -> Result<Raw> {
+    let ClipArray { name, shape, data } = a;
+    let (dancers, j) = match shape.as_slice() {
+        [t, j, 3] if *t > 0 && *j > 0 => (1, *j),
+        [n, t, j, 3] if *n > 0 && *t > 0 && *j > 0 => (*n, *j),
+        s => bail!("array {name}: expected joints (T, J, 3) or (N, T, J, 3), got shape {s:?}"),
+    };
+    if data.len() != shape.iter().product::<usize>() {
+        bail!("array {name}: {} values for shape {shape:?}", data.len());
+    }
+    let per = data.len() / dancers;
+    Ok((
+        data.chunks_exact(per).map(<[f64]>::to_vec).collect(),
+        j,
+        None,
+    ))
 }
 
 /// Raw joints of a file: `(dancers, joints per dancer, frame rate stored in the file)`.
@@ -145,7 +202,18 @@ fn load_clip(
     fps_arg: Option<f64>,
     source_fps: Option<f64>,
 ) -> Result<Clip> {
-    let (raw, joints, file_fps) = read_raw(path, source_fps)?;
+    let raw = read_raw(path, source_fps)?;
+    clip_of(path.to_path_buf(), raw, protocol, fps_arg, source_fps)
+}
+
+/// A clip of raw dancers read from `path` (or named so), the protocol applied to each.
+fn clip_of(
+    path: PathBuf,
+    (raw, joints, file_fps): Raw,
+    protocol: &Protocol,
+    fps_arg: Option<f64>,
+    source_fps: Option<f64>,
+) -> Result<Clip> {
     // A raw-joints .npy has no header: --source-fps is its rate.
     let fps_arg = fps_arg.or(source_fps);
     let fps = match (file_fps, fps_arg, protocol.fps) {
@@ -177,7 +245,7 @@ fn load_clip(
         placed.push(as_given.prepare(d, joints, fps).with_context(who)?.joints);
     }
     Ok(Clip {
-        path: path.to_path_buf(),
+        path,
         dancers,
         placed,
     })

@@ -53,6 +53,7 @@ use serde_json::{Value, json};
 
 use dancegen_metrics::protocol::Protocol;
 use input::Clip;
+pub use input::{ClipArray, Input};
 use std::path::PathBuf;
 
 /// The metrics `eval` knew before the physical figures ([`all_metrics`] adds them), in table
@@ -214,14 +215,14 @@ fn parse_metric_list(list: &str) -> Result<Option<Vec<String>>> {
 /// What to evaluate and how: `dancegen eval`'s flags, with its defaults in [`Default`].
 #[derive(Clone, Debug)]
 pub struct EvalOptions {
-    /// Generated clips: files or folders (`--pred`).
-    pub pred: Vec<PathBuf>,
+    /// Generated clips: files or folders, or arrays (`--pred`).
+    pub pred: Vec<Input>,
     /// Ground-truth clips (`--gt`).
-    pub gt: Vec<PathBuf>,
+    pub gt: Vec<Input>,
     /// The leaders of duet `pred` clips, paired by file stem (`--leader`).
-    pub leader: Vec<PathBuf>,
+    pub leader: Vec<Input>,
     /// The leaders of duet `gt` clips (`--gt-leader`).
-    pub gt_leader: Vec<PathBuf>,
+    pub gt_leader: Vec<Input>,
     /// The paper's protocol (`--protocol`).
     pub protocol: Protocol,
     /// Frame rate of `.npy` clips without one (`--fps`).
@@ -239,8 +240,11 @@ pub struct EvalOptions {
     pub genre_min_clips: u64,
     /// BAS variant (`--bas-variant`).
     pub bas_variant: Variant,
-    /// Music beat frames, one per line (`--beats`).
+    /// Music beats: a `.npy` of beat frames, or of features whose last column marks beats
+    /// (`--beats`).
     pub beats: Option<PathBuf>,
+    /// Music beat frames given directly (the library's `--beats`; wins over `beats`).
+    pub beat_frames: Option<Vec<usize>>,
     /// The song, whose beats are found (`--music`).
     pub music: Option<PathBuf>,
     /// Frames between the boundaries `boundary_jerk` measures (`--window`).
@@ -265,6 +269,7 @@ impl Default for EvalOptions {
             genre_min_clips: 1,
             bas_variant: Variant::Bailando,
             beats: None,
+            beat_frames: None,
             music: None,
             window: DEFAULT_WINDOW,
         }
@@ -344,7 +349,7 @@ pub fn evaluate(opts: &EvalOptions) -> Result<Report> {
         bail!("--gt-leader needs --gt (the GT followers)");
     }
 
-    let load = |inputs: &[std::path::PathBuf], flag: &str| -> Result<Vec<Clip>> {
+    let load = |inputs: &[Input], flag: &str| -> Result<Vec<Clip>> {
         if inputs.is_empty() {
             return Ok(Vec::new());
         }
@@ -360,7 +365,7 @@ pub fn evaluate(opts: &EvalOptions) -> Result<Report> {
 
     let offer = Offer {
         gt: !gt.is_empty(),
-        beats: args.beats.is_some() || args.music.is_some(),
+        beats: args.beats.is_some() || args.beat_frames.is_some() || args.music.is_some(),
         pred_groups: pred.iter().any(Clip::is_group),
         gt_groups: gt.iter().any(Clip::is_group),
         pred_duets: pred_pairs.iter().any(Option::is_some),

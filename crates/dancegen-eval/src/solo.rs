@@ -166,6 +166,9 @@ pub fn clip_beat_counts(
 /// Music-beat frame indices from `--beats` (`.npy` of indices, or a 35-dim feature file whose
 /// last column is the beat flag) or `--music` (computed at the clips' frame rate).
 pub fn music_beats(args: &EvalOptions, clips: &[Clip]) -> Result<Vec<usize>> {
+    if let Some(frames) = &args.beat_frames {
+        return Ok(frames.clone());
+    }
     if let Some(path) = &args.beats {
         let a = dancegen_io::read_npy(path).with_context(|| format!("{}", path.display()))?;
         if let Some(v) = a.data.iter().find(|v| !v.is_finite()) {
