@@ -1,18 +1,18 @@
 //! `import dancegen`: the Python package's native module (`dancegen._dancegen`), built with
 //! PyO3 and maturin (`pip install ./crates/dancegen-py`). Arrays in and out are numpy arrays
 //! (float32, C order); every long call runs without the GIL; errors are `DancegenError` with
-//! the CLI's words. The Python side (`python/dancegen/__init__.py`) adds keyword handling.
+//! the CLI's words. The Python side (`python/dancegen/`) adds keyword handling, the
+//! `metrics` and `io` modules and the type stubs.
 
-use std::path::PathBuf;
-use std::sync::Arc;
+mod arrays;
+mod eval;
+mod generate;
+mod io;
+mod music;
 
-use dancegen_music::decode::AudioSource;
-use dancegen_music::features::{ExtractOptions, FeatureSet, extract};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 create_exception!(
     _dancegen,
@@ -21,158 +21,28 @@ create_exception!(
     "dancegen refused or failed; the message says why, in the CLI's words."
 );
 
-fn fail(e: impl std::fmt::Display) -> PyErr {
+/// A `DancegenError` with `e`'s words.
+pub(crate) fn fail(e: impl std::fmt::Display) -> PyErr {
     DancegenError::new_err(e.to_string())
 }
 
-/// The song: a path (str or os.PathLike), or a 1-D float array of mono samples with its
-/// `sample_rate` (encoded as a 32-bit float WAV in memory and decoded as a file would be).
-fn audio_source(audio: &Bound<'_, PyAny>, sample_rate: Option<u32>) -> PyResult<AudioSource> {
-    if let Ok(path) = audio.extract::<PathBuf>() {
-        if sample_rate.is_some() {
-            return Err(fail("sample_rate is for an array of samples, not a file"));
-        }
-        return Ok(AudioSource::File(path));
-    }
-    let samples: PyReadonlyArray1<'_, f32> = audio.extract().map_err(|_| {
-        fail("audio: give a path, or a 1-D float32 array of mono samples with sample_rate")
-    })?;
-    let rate = sample_rate.ok_or_else(|| fail("an array of samples needs its sample_rate"))?;
-    if rate == 0 {
-        return Err(fail("sample_rate must be positive"));
-    }
-    let spec = hound::WavSpec {
-        channels: 1,
-        sample_rate: rate,
-        bits_per_sample: 32,
-        sample_format: hound::SampleFormat::Float,
-    };
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    {
-        let mut w = hound::WavWriter::new(&mut bytes, spec).map_err(fail)?;
-        for &s in samples.as_slice().map_err(fail)? {
-            w.write_sample(s).map_err(fail)?;
-        }
-        w.finalize().map_err(fail)?;
-    }
-    Ok(AudioSource::Bytes {
-        name: PathBuf::from("samples.wav"),
-        bytes: Arc::from(bytes.into_inner()),
-    })
-}
-
-fn options(fps: u32, set: &str, start_bpm: Option<f64>) -> PyResult<ExtractOptions> {
-    let set = match set {
-        "edge35" => FeatureSet::Edge35,
-        "tcdiff438" => FeatureSet::Tcdiff438,
-        other => return Err(fail(format!("set '{other}': choose edge35 or tcdiff438"))),
-    };
-    if let Some(b) = start_bpm
-        && !(b.is_finite() && b > 0.0)
-    {
-        return Err(fail(format!(
-            "start_bpm must be a positive number, got {b}"
-        )));
-    }
-    Ok(ExtractOptions {
-        fps,
-        set,
-        start_bpm,
-    })
-}
-
-/// Music features of `audio` at `fps` frames a second: `(T, D)` float32 (`set` "edge35": EDGE's
-/// 35, "tcdiff438": TCDiff's 438), as `dancegen features` computes them.
-#[pyfunction]
-#[pyo3(signature = (audio, fps=30, set="edge35", start_bpm=None, sample_rate=None))]
-fn features<'py>(
-    py: Python<'py>,
-    audio: &Bound<'py, PyAny>,
-    fps: u32,
-    set: &str,
-    start_bpm: Option<f64>,
-    sample_rate: Option<u32>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let source = audio_source(audio, sample_rate)?;
-    let opts = options(fps, set, start_bpm)?;
-    let f = py.detach(|| extract(&source, &opts)).map_err(fail)?;
-    let m = f.features;
-    let arr = PyArray1::from_vec(py, m.data).reshape([m.rows, m.cols])?;
-    Ok(arr.into_any())
-}
-
-/// Beats of `audio`: a dict with `beat_times` and `onset_times` (seconds), `beat_frames` and
-/// `onset_frames` (at `fps`), and `tempo_bpm`, as `dancegen beats` finds them.
-#[pyfunction]
-#[pyo3(signature = (audio, fps=30, start_bpm=None, sample_rate=None))]
-fn beats<'py>(
-    py: Python<'py>,
-    audio: &Bound<'py, PyAny>,
-    fps: u32,
-    start_bpm: Option<f64>,
-    sample_rate: Option<u32>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let source = audio_source(audio, sample_rate)?;
-    let opts = options(fps, "edge35", start_bpm)?;
-    let f = py.detach(|| extract(&source, &opts)).map_err(fail)?;
-    let d = PyDict::new(py);
-    d.set_item("tempo_bpm", f.tempo_bpm)?;
-    d.set_item("beat_times", f.beat_times())?;
-    d.set_item("beat_frames", f.beat_frames.clone())?;
-    d.set_item("onset_frames", f.onset_frames.clone())?;
-    let onset_times: Vec<f64> = f
-        .onset_frames
-        .iter()
-        .map(|&x| x as f64 / fps as f64)
-        .collect();
-    d.set_item("onset_times", onset_times)?;
-    Ok(d)
-}
-
-/// `dancegen eval --json` as text (the Python wrapper `dancegen.evaluate` parses it).
-#[pyfunction]
-#[allow(clippy::too_many_arguments)]
-fn evaluate_json(
-    py: Python<'_>,
-    pred: Vec<PathBuf>,
-    gt: Vec<PathBuf>,
-    leader: Vec<PathBuf>,
-    gt_leader: Vec<PathBuf>,
-    protocol: &str,
-    fps: Option<f64>,
-    source_fps: Option<f64>,
-    metrics: Option<String>,
-    music: Option<PathBuf>,
-    beats: Option<PathBuf>,
-    bas_variant: &str,
-    window: u64,
-) -> PyResult<String> {
-    let opts = dancegen_eval::EvalOptions {
-        pred,
-        gt,
-        leader,
-        gt_leader,
-        protocol: dancegen_eval::protocol_named(protocol).map_err(fail)?,
-        fps,
-        source_fps,
-        metrics,
-        music,
-        beats,
-        bas_variant: dancegen_eval::bas_variant_named(bas_variant).map_err(fail)?,
-        window,
-        ..dancegen_eval::EvalOptions::default()
-    };
-    let report = py
-        .detach(|| dancegen_eval::evaluate(&opts))
-        .map_err(|e| fail(format!("{e:#}")))?;
-    Ok(report.to_json().to_string())
+/// A `DancegenError` with an error chain's words, outermost first (as the CLI prints them).
+pub(crate) fn fail_chain(e: anyhow::Error) -> PyErr {
+    DancegenError::new_err(format!("{e:#}"))
 }
 
 #[pymodule]
 fn _dancegen(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DancegenError", m.py().get_type::<DancegenError>())?;
-    m.add_function(wrap_pyfunction!(features, m)?)?;
-    m.add_function(wrap_pyfunction!(beats, m)?)?;
-    m.add_function(wrap_pyfunction!(evaluate_json, m)?)?;
+    m.add_function(wrap_pyfunction!(music::features, m)?)?;
+    m.add_function(wrap_pyfunction!(music::beats, m)?)?;
+    m.add_function(wrap_pyfunction!(eval::evaluate_json, m)?)?;
+    m.add_class::<io::Motion>()?;
+    m.add_function(wrap_pyfunction!(io::read, m)?)?;
+    m.add_function(wrap_pyfunction!(io::smpl, m)?)?;
+    m.add_function(wrap_pyfunction!(io::joints, m)?)?;
+    m.add_function(wrap_pyfunction!(io::smpl_fk, m)?)?;
+    m.add_class::<generate::Dance>()?;
+    m.add_function(wrap_pyfunction!(generate::generate_named, m)?)?;
     Ok(())
 }

@@ -1,35 +1,62 @@
-"""The Python package against the CLI it mirrors: the same numbers as `dancegen features` and
-`dancegen eval --json` for the same inputs, and bad input as DancegenError in the CLI's words.
+"""The Python package's music analysis and `evaluate` against the CLI they mirror: the same
+numbers as `dancegen features` and `dancegen eval --json` for the same inputs, features equal to
+librosa's golden outputs within the CLI's tolerances, and bad input as DancegenError in the
+CLI's words.
 
 Run: pytest crates/dancegen-py/tests (after `maturin develop` or `pip install ./crates/dancegen-py`),
 with DANCEGEN_BIN naming the dancegen binary to compare with (default: dancegen on PATH).
 """
 
 import json
-import os
-import shutil
-import subprocess
 import wave
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import dancegen
-
-ROOT = Path(__file__).resolve().parents[3]
-SHARED = ROOT.parent / "shared"
-SONG = SHARED / "data" / "music" / "sectoid" / "feelings.ogg"
-DEMO = ROOT / "assets" / "demo_metal_madness_45s.ogg"
-BIN = os.environ.get("DANCEGEN_BIN") or shutil.which("dancegen")
+from conftest import DEMO, MUSIC, cli
 
 
-def cli(*args):
-    if not BIN:
-        pytest.skip("no dancegen binary (set DANCEGEN_BIN)")
-    out = subprocess.run([BIN, *map(str, args)], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
+def ref_cases():
+    """Every (clip, fps) of the librosa 0.11 golden features (`fixtures/music/ref`)."""
+    out = []
+    for key_dir in sorted((MUSIC / "ref").iterdir()):
+        if key_dir.name.startswith("_") or not key_dir.is_dir():
+            continue
+        for fps in (30, 60):
+            if (key_dir / f"fps{fps}").is_dir():
+                out.append((key_dir.name, fps))
     return out
+
+
+def clip_for_key(key):
+    for suffix, ext in (("_ogg", "ogg"), ("_mp3", "mp3")):
+        if key.endswith(suffix):
+            return MUSIC / "clips" / f"{key[:-len(suffix)]}.{ext}"
+    return MUSIC / "clips" / f"{key}.wav"
+
+
+def agreement(got, want):
+    """|A ∩ B| / max(|A|, |B|): the share of frames both mark, extras penalised."""
+    got, want = set(np.flatnonzero(got > 0.5)), set(np.flatnonzero(want > 0.5))
+    return 1.0 if not (got or want) else len(got & want) / max(len(got), len(want))
+
+
+@pytest.mark.parametrize("key,fps", ref_cases())
+def test_features_equal_librosa_within_the_cli_tolerances(key, fps):
+    """The tolerances of crates/dancegen-music/tests/features35.rs, which says why each is."""
+    ref = MUSIC / "ref" / key / f"fps{fps}"
+    want = np.load(ref / "feats35.npy").astype(np.float32)
+    meta = json.loads((ref / "meta.json").read_text())
+    got = dancegen.features(clip_for_key(key), fps=fps)
+    assert got.shape == want.shape
+    env_max = max(float(want[:, 0].max()), 1e-6)
+    assert np.abs(got[:, 0] - want[:, 0]).max() <= 1e-3 * env_max, "onset envelope"
+    assert np.abs(got[:, 1:21] - want[:, 1:21]).max() < 0.01, "mfcc"
+    assert np.abs(got[:, 21:33] - want[:, 21:33]).max() < 1e-3, "chroma_cens"
+    assert agreement(got[:, 33], want[:, 33]) >= 0.98, "onset peaks"
+    assert agreement(got[:, 34], want[:, 34]) >= 0.98, "beats"
+    assert dancegen.beats(clip_for_key(key), fps=fps)["tempo_bpm"] == meta["tempo"]
 
 
 def test_features_are_the_clis(tmp_path):
