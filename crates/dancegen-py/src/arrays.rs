@@ -21,14 +21,22 @@ pub fn values<T: From<f32> + Copy + 'static>(
     what: &str,
     from_f64: fn(f64) -> T,
 ) -> PyResult<(Vec<usize>, Vec<T>)> {
+    // A C-ordered array is read as one slice; any other order (Fortran order is contiguous
+    // too, but its slice is not in C order) element by element, slower.
     if let Ok(a) = obj.extract::<PyReadonlyArrayDyn<'_, f32>>() {
         let shape = a.shape().to_vec();
-        let data = a.as_array().iter().map(|&v| T::from(v)).collect();
+        let data = match a.as_slice() {
+            Ok(s) if a.is_c_contiguous() => s.iter().map(|&v| T::from(v)).collect(),
+            _ => a.as_array().iter().map(|&v| T::from(v)).collect(),
+        };
         return Ok((shape, data));
     }
     if let Ok(a) = obj.extract::<PyReadonlyArrayDyn<'_, f64>>() {
         let shape = a.shape().to_vec();
-        let data = a.as_array().iter().map(|&v| from_f64(v)).collect();
+        let data = match a.as_slice() {
+            Ok(s) if a.is_c_contiguous() => s.iter().map(|&v| from_f64(v)).collect(),
+            _ => a.as_array().iter().map(|&v| from_f64(v)).collect(),
+        };
         return Ok((shape, data));
     }
     let kind = obj

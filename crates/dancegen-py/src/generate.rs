@@ -3,7 +3,7 @@
 //! the one `dancegen generate -o` writes for the same song, options and seed).
 
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use dancegen_generate::models::{Origin, SearchDir, checkout_models};
 use dancegen_generate::request::{Character, DancerSelection, OutputRequest, VideoSize};
@@ -220,9 +220,23 @@ pub fn generate_named(py: Python<'_>, options_json: &str) -> PyResult<Dance> {
     let mut request = dancegen_generate::flags::request(&flags).map_err(fail_chain)?;
     // Files are written by Dance.save.
     request.outputs.clear();
-    let done = py
-        .detach(|| generator().run_keeping(&request, &|_: &Progress| {}, &CancelToken::new()))
-        .map_err(|e| fail_chain(e.into()))?;
+    // Ctrl-C stops the job: each progress report (at least one per sampler step) looks for a
+    // pending KeyboardInterrupt and cancels.
+    let cancel = CancelToken::new();
+    let interrupt: Mutex<Option<PyErr>> = Mutex::new(None);
+    let on_progress = |_: &Progress| {
+        if let Err(e) = Python::attach(|py| py.check_signals()) {
+            cancel.cancel();
+            if let Ok(mut slot) = interrupt.lock() {
+                slot.get_or_insert(e);
+            }
+        }
+    };
+    let done = py.detach(|| generator().run_keeping(&request, &on_progress, &cancel));
+    if let Some(e) = interrupt.lock().ok().and_then(|mut slot| slot.take()) {
+        return Err(e);
+    }
+    let done = done.map_err(|e| fail_chain(e.into()))?;
     let kept = done
         .kept
         .clone()

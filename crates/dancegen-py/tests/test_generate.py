@@ -90,3 +90,30 @@ def test_bad_requests_are_refused_in_the_clis_words(tmp_path):
     with pytest.raises(dancegen.DancegenError, match="follower_only"):
         dance.save(tmp_path / "dance.glb", follower_only=True)
     assert not list(tmp_path.iterdir()), "a refused request leaves no file"
+
+
+def test_ctrl_c_stops_a_long_generation():
+    """SIGINT (Ctrl-C) during `generate` raises KeyboardInterrupt within a sampler step or
+    two, instead of running to the end of a 40-second dance."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        "import dancegen, sys\n"
+        "print('started', flush=True)\n"
+        f"dancegen.generate({str(DEMO)!r}, end=40)\n"
+        "print('finished', flush=True)\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "started"
+    time.sleep(3.0)  # into the model load and the sampling
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    stopped_after = time.monotonic() - sent
+    assert "finished" not in out
+    assert "KeyboardInterrupt" in err, err
+    assert stopped_after < 10.0, f"took {stopped_after:.1f} s to stop"

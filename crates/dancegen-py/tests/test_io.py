@@ -101,3 +101,13 @@ def test_bad_input_says_what_is_wrong(tmp_path):
     with pytest.raises(dancegen.DancegenError, match="rig"):
         io.smpl(poses, trans).save(tmp_path / "m.bvh", rig="blender-rigify")
     assert not list(tmp_path.iterdir()), "a refused write leaves no file"
+
+
+def test_arrays_in_any_memory_order_are_read_alike():
+    poses, trans = arbitrary_motion()
+    want = io.smpl_fk(poses, trans)
+    fortran = np.asfortranarray(poses.astype(np.float64))
+    strided = np.concatenate([poses, poses], axis=0)[::2]
+    np.testing.assert_array_equal(io.smpl_fk(fortran, trans), want)
+    np.testing.assert_array_equal(io.smpl_fk(strided, trans[: len(strided)]),
+                                  io.smpl_fk(np.ascontiguousarray(strided), trans[: len(strided)]))
