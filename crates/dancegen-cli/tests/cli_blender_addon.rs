@@ -8,6 +8,9 @@
 //! audio, reported in words.
 //!
 //! Blender runs `tests/blender/addon_check.py`. Needs `blender` as `cli_blender.rs` does.
+//! The Dance button as a user presses it (modal: progress in the status bar, Esc cancels,
+//! Blender's own timers keep running) needs Blender's window: `tests/blender/addon_modal_check.py`
+//! under `xvfb-run`.
 
 mod common;
 
@@ -40,28 +43,65 @@ fn addon_zip(dir: &Path) -> PathBuf {
     zip
 }
 
-/// Runs `addon_check.py` for `case`; its report.
+/// Runs `addon_check.py` for `case` in Blender's background mode; its report.
 fn run(blender: &Path, dir: &Path, case: &str, song: &Path, character: Option<&Path>) -> Value {
+    let mut cmd = Command::new(blender);
+    cmd.arg("-b");
+    run_script(cmd, "addon_check.py", dir, case, song, character)
+}
+
+/// Runs `addon_modal_check.py` for `case` in Blender with its window, on a virtual X display
+/// (`xvfb-run`); its report. `None` (the test skips) without `xvfb-run`, unless
+/// `DANCEGEN_REQUIRE_BLENDER=1`.
+fn run_with_window(blender: &Path, dir: &Path, case: &str) -> Option<Value> {
+    let found = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join("xvfb-run").is_file()));
+    if !found {
+        assert!(
+            std::env::var("DANCEGEN_REQUIRE_BLENDER").as_deref() != Ok("1"),
+            "DANCEGEN_REQUIRE_BLENDER=1 but no xvfb-run on PATH (apt-get install xvfb xauth)"
+        );
+        eprintln!("skipped: no xvfb-run on PATH (tools/test.sh installs it)");
+        return None;
+    }
+    let mut cmd = Command::new("xvfb-run");
+    cmd.arg("-a").arg(blender).arg("--enable-event-simulate");
+    Some(run_script(
+        cmd,
+        "addon_modal_check.py",
+        dir,
+        case,
+        &shared().join("data/music/sectoid/feelings.ogg"),
+        None,
+    ))
+}
+
+/// Runs Blender (`cmd`, its mode chosen) with `tests/blender/SCRIPT` for `case`; its report.
+fn run_script(
+    mut cmd: Command,
+    script: &str,
+    dir: &Path,
+    case: &str,
+    song: &Path,
+    character: Option<&Path>,
+) -> Value {
     let zip = addon_zip(dir);
     let out_dir = dir.join(format!("{case}-files"));
     let report = dir.join(format!("{case}.json"));
-    let mut cmd = Command::new(blender);
-    cmd.args([
-        "-b",
-        "--factory-startup",
-        "-noaudio",
-        "--python-exit-code",
-        "1",
-    ])
-    .arg("--python")
-    .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/blender/addon_check.py"))
-    .arg("--")
-    .arg(&zip)
-    .arg(env!("CARGO_BIN_EXE_dancegen"))
-    .arg(&out_dir)
-    .arg(&report)
-    .arg(case)
-    .arg(song);
+    cmd.args(["--factory-startup", "-noaudio", "--python-exit-code", "1"])
+        .arg("--python")
+        .arg(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/blender")
+                .join(script),
+        )
+        .arg("--")
+        .arg(&zip)
+        .arg(env!("CARGO_BIN_EXE_dancegen"))
+        .arg(&out_dir)
+        .arg(&report)
+        .arg(case)
+        .arg(song);
     if let Some(c) = character {
         cmd.arg(c);
     }
@@ -195,5 +235,48 @@ fn the_addon_dances_on_the_selected_armature_and_says_what_went_wrong() {
     assert!(
         r["last_error"].as_str().unwrap().contains("notes.mp3"),
         "{r}"
+    );
+}
+
+#[test]
+fn the_dance_button_works_in_the_background_shows_progress_and_esc_cancels() {
+    let Some(blender) = blender() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let Some(r) = run_with_window(&blender, dir.path(), "finish") else {
+        return;
+    };
+    assert_eq!(r["error"], Value::Null, "{r}");
+    assert_eq!(r["invoke"], serde_json::json!(["RUNNING_MODAL"]), "{r}");
+    // Blender's own 0.1 s timer kept firing while the binary worked: the UI was not blocked.
+    let ticks = r["ticks_while_running"].as_u64().unwrap();
+    assert!(ticks >= 5, "{ticks} ticks while the dance was made: {r}");
+    // The status bar followed the binary's progress, in words, up to 100 %.
+    let status = r["status"].as_array().unwrap();
+    let fractions: Vec<f64> = status.iter().map(|s| s[0].as_f64().unwrap()).collect();
+    assert!(status.len() >= 3, "{r}");
+    assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
+    assert_eq!(fractions.last(), Some(&1.0), "{r}");
+    assert!(
+        status
+            .iter()
+            .all(|s| s[1].as_str().unwrap().starts_with("dancegen: "))
+    );
+    assert_eq!(r["armatures"].as_array().unwrap().len(), 1, "{r}");
+    assert_eq!(r["binary_exit_code"], 0, "{r}");
+
+    // Esc once the progress has started: the binary is stopped and nothing comes in.
+    let r = run_with_window(&blender, dir.path(), "cancel").unwrap();
+    assert_eq!(r["error"], Value::Null, "{r}");
+    assert!(r["esc_at_fraction"].as_f64().unwrap() < 1.0, "{r}");
+    assert_eq!(r["binary_running_at_end"], false, "{r}");
+    assert_ne!(
+        r["binary_exit_code"], 0,
+        "the binary was stopped, not finished: {r}"
+    );
+    assert_eq!(r["armatures"], serde_json::json!([]), "{r}");
+    assert_eq!(
+        r["files"],
+        serde_json::json!([]),
+        "a cancelled dance leaves no file: {r}"
     );
 }
