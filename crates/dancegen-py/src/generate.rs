@@ -3,7 +3,8 @@
 //! the one `dancegen generate -o` writes for the same song, options and seed).
 
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, OnceLock};
+use std::time::Duration;
 
 use dancegen_generate::models::{Origin, SearchDir, checkout_models};
 use dancegen_generate::request::{Character, DancerSelection, OutputRequest, VideoSize};
@@ -220,22 +221,31 @@ pub fn generate_named(py: Python<'_>, options_json: &str) -> PyResult<Dance> {
     let mut request = dancegen_generate::flags::request(&flags).map_err(fail_chain)?;
     // Files are written by Dance.save.
     request.outputs.clear();
-    // Ctrl-C stops the job: each progress report (at least one per sampler step) looks for a
-    // pending KeyboardInterrupt and cancels.
+    // Ctrl-C stops the job. Python handles signals on its main thread only, and progress is
+    // reported from whichever thread samples, so the job runs on a thread of its own while
+    // this (the caller's) thread looks for a pending KeyboardInterrupt every 50 ms and cancels
+    // the job (it stops within a sampler step).
     let cancel = CancelToken::new();
-    let interrupt: Mutex<Option<PyErr>> = Mutex::new(None);
-    let on_progress = |_: &Progress| {
-        if let Err(e) = Python::attach(|py| py.check_signals()) {
-            cancel.cancel();
-            if let Ok(mut slot) = interrupt.lock() {
-                slot.get_or_insert(e);
+    let (done, interrupt) = py.detach(|| {
+        std::thread::scope(|s| {
+            let job = s.spawn(|| generator().run_keeping(&request, &|_: &Progress| {}, &cancel));
+            let mut interrupt = None;
+            while !job.is_finished() {
+                std::thread::sleep(Duration::from_millis(50));
+                if interrupt.is_none()
+                    && let Err(e) = Python::attach(|py| py.check_signals())
+                {
+                    cancel.cancel();
+                    interrupt = Some(e);
+                }
             }
-        }
-    };
-    let done = py.detach(|| generator().run_keeping(&request, &on_progress, &cancel));
-    if let Some(e) = interrupt.lock().ok().and_then(|mut slot| slot.take()) {
+            (job.join(), interrupt)
+        })
+    });
+    if let Some(e) = interrupt {
         return Err(e);
     }
+    let done = done.map_err(|_| fail("the generation failed unexpectedly (please report)"))?;
     let done = done.map_err(|e| fail_chain(e.into()))?;
     let kept = done
         .kept

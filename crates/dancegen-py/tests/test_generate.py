@@ -116,4 +116,4 @@ def test_ctrl_c_stops_a_long_generation():
     stopped_after = time.monotonic() - sent
     assert "finished" not in out
     assert "KeyboardInterrupt" in err, err
-    assert stopped_after < 10.0, f"took {stopped_after:.1f} s to stop"
+    assert stopped_after < 5.0, f"took {stopped_after:.1f} s to stop"
