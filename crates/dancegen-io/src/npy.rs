@@ -158,6 +158,7 @@ pub fn read_npy(path: &Path) -> Result<NpyArray, ReadError> {
 /// Parses the bytes of a numeric `.npy` stream (float32/64, int8-64, uint8-64, bool) into f64,
 /// C order. The error is a reason without a file name; callers add where the bytes came from.
 pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
+    check_header(bytes)?;
     let npy = npyz::NpyFile::new(bytes).map_err(|e| format!("not a .npy file: {e}"))?;
     let fortran = npy.order() == npyz::Order::Fortran;
     let shape: Vec<usize> = npy.shape().iter().map(|&s| s as usize).collect();
@@ -201,6 +202,59 @@ pub fn parse_npy(bytes: &[u8]) -> Result<NpyArray, String> {
         data
     };
     Ok(NpyArray { shape, data, dtype })
+}
+
+/// Longest `.npy` header read, in bytes: numpy's own default limit (`max_header_size`, numpy
+/// 1.24+), set for the same reason: the header is a Python literal, and parsing a crafted one
+/// can take very long. A header `np.save` writes is under 200 bytes.
+pub const NPY_MAX_HEADER_BYTES: usize = 10_000;
+
+/// Deepest bracket nesting (`(`, `[`, `{`) read in a `.npy` header. A numeric array's header
+/// nests 2 deep (the dict, its shape tuple); a structured dtype a few more. The header parser
+/// (`npyz`'s, a `py_literal` grammar) backtracks exponentially in the nesting depth: a
+/// 257-byte file with 28 nested `[` took over two minutes (found by `fuzz/`'s `npy` target).
+pub const NPY_MAX_HEADER_NESTING: usize = 8;
+
+/// Refuses a header longer than [`NPY_MAX_HEADER_BYTES`] or nested deeper than
+/// [`NPY_MAX_HEADER_NESTING`] before it is parsed. Bytes too short to hold a header are left
+/// to the parser, which says what is missing.
+fn check_header(bytes: &[u8]) -> Result<(), String> {
+    let Some(rest) = bytes.strip_prefix(b"\x93NUMPY") else {
+        return Ok(());
+    };
+    let (len, header) = match rest {
+        [1, _, a, b, h @ ..] => (u16::from_le_bytes([*a, *b]) as usize, h),
+        [2 | 3, _, a, b, c, d, h @ ..] => (u32::from_le_bytes([*a, *b, *c, *d]) as usize, h),
+        _ => return Ok(()),
+    };
+    if len > NPY_MAX_HEADER_BYTES {
+        return Err(format!(
+            "not a .npy file dancegen reads: its header is {len} bytes (at most \
+             {NPY_MAX_HEADER_BYTES})"
+        ));
+    }
+    let header = &header[..len.min(header.len())];
+    let (mut depth, mut deepest, mut quote) = (0usize, 0usize, None::<u8>);
+    for &b in header {
+        match (quote, b) {
+            (Some(q), _) if b == q => quote = None,
+            (Some(_), _) => {}
+            (None, b'\'' | b'"') => quote = Some(b),
+            (None, b'(' | b'[' | b'{') => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            (None, b')' | b']' | b'}') => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    if deepest > NPY_MAX_HEADER_NESTING {
+        return Err(format!(
+            "not a .npy file dancegen reads: its header nests {deepest} brackets deep (at \
+             most {NPY_MAX_HEADER_NESTING})"
+        ));
+    }
+    Ok(())
 }
 
 /// Longest string [`parse_npy_text`] reads, in characters: a record, not a data set.
