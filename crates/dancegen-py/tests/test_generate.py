@@ -100,7 +100,12 @@ def test_ctrl_c_stops_a_long_generation():
     import sys
     import time
 
+    # A shell that starts commands in the background (CI, nohup) hands them SIGINT ignored,
+    # and Python then installs no KeyboardInterrupt handler: the child installs it, as an
+    # interactive Python has it.
     script = (
+        "import signal\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "import dancegen, sys\n"
         "print('started', flush=True)\n"
         f"dancegen.generate({str(DEMO)!r}, end=40)\n"
