@@ -5,7 +5,8 @@
 //! file is never held in memory (a one-hour stereo song would otherwise need ~1.3 GB).
 
 use std::fs::File;
-use std::io::Cursor;
+use std::io::{Cursor, Read, Seek, SeekFrom};
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use symphonia::core::codecs::audio::{AudioDecoder, AudioDecoderOptions};
@@ -16,6 +17,7 @@ use symphonia::core::io::{MediaSource, MediaSourceStream};
 use symphonia::core::meta::MetadataOptions;
 
 use crate::error::{MusicError, Result};
+use crate::wav_guard::{WAVE_HEAD_BYTES, check_wave_head};
 
 /// Where a song comes from: a file, or bytes in memory (the bundled demo song, an upload).
 #[derive(Clone, Debug)]
@@ -70,17 +72,29 @@ impl MonoDecoder {
     /// Opens a file or an in-memory song.
     pub fn open_source(source: &AudioSource) -> Result<Self> {
         let path = source.label();
-        let (media, len): (Box<dyn MediaSource>, u64) = match source {
+        let (media, len, head): (Box<dyn MediaSource>, u64, Vec<u8>) = match source {
             AudioSource::File(p) => {
-                let file = File::open(p).map_err(|err| MusicError::Open {
+                let open_err = |err| MusicError::Open {
                     path: p.clone(),
                     err,
-                })?;
+                };
+                let mut file = File::open(p).map_err(open_err)?;
                 let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-                (Box::new(file), len)
+                let mut head = Vec::new();
+                (&mut file)
+                    .take(WAVE_HEAD_BYTES as u64)
+                    .read_to_end(&mut head)
+                    .and_then(|_| file.seek(SeekFrom::Start(0)))
+                    .map_err(open_err)?;
+                (Box::new(file), len, head)
             }
             AudioSource::Bytes { bytes, .. } => {
-                (Box::new(Cursor::new(bytes.clone())), bytes.len() as u64)
+                let head = bytes[..bytes.len().min(WAVE_HEAD_BYTES)].to_vec();
+                (
+                    Box::new(Cursor::new(bytes.clone())),
+                    bytes.len() as u64,
+                    head,
+                )
             }
         };
         if len == 0 {
@@ -88,31 +102,36 @@ impl MonoDecoder {
                 path: path.to_path_buf(),
             });
         }
+        check_wave_head(&head).map_err(|reason| MusicError::UnknownFormat {
+            path: path.to_path_buf(),
+            reason,
+        })?;
         let mss = MediaSourceStream::new(media, Default::default());
         let mut hint = Hint::new();
         if let Some(ext) = path.extension().and_then(|e| e.to_str()) {
             hint.with_extension(ext);
         }
-        let format = symphonia::default::get_probe()
-            .probe(
+        let format = decoder_call(path, "reading the container header", || {
+            symphonia::default::get_probe().probe(
                 &hint,
                 mss,
                 FormatOptions::default(),
                 MetadataOptions::default(),
             )
-            .map_err(|e| match e {
-                // The container was recognised but holds an encoding we have no decoder for.
-                SymError::Unsupported(what) if !what.contains("format reader") => {
-                    MusicError::UnsupportedCodec {
-                        path: path.to_path_buf(),
-                        reason: what.to_string(),
-                    }
-                }
-                e => MusicError::UnknownFormat {
+        })?
+        .map_err(|e| match e {
+            // The container was recognised but holds an encoding we have no decoder for.
+            SymError::Unsupported(what) if !what.contains("format reader") => {
+                MusicError::UnsupportedCodec {
                     path: path.to_path_buf(),
-                    reason: e.to_string(),
-                },
-            })?;
+                    reason: what.to_string(),
+                }
+            }
+            e => MusicError::UnknownFormat {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            },
+        })?;
         let track =
             format
                 .default_track(TrackType::Audio)
@@ -129,12 +148,14 @@ impl MonoDecoder {
                 path: path.to_path_buf(),
             })?
             .clone();
-        let decoder = symphonia::default::get_codecs()
-            .make_audio_decoder(&params, &AudioDecoderOptions::default())
-            .map_err(|e| MusicError::UnsupportedCodec {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
-            })?;
+        let decoder = decoder_call(path, "setting up the decoder", || {
+            symphonia::default::get_codecs()
+                .make_audio_decoder(&params, &AudioDecoderOptions::default())
+        })?
+        .map_err(|e| MusicError::UnsupportedCodec {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
         let sample_rate = params.sample_rate.unwrap_or(0);
         let channels = params.channels.as_ref().map(|c| c.count()).unwrap_or(0);
         Ok(Self {
@@ -185,32 +206,37 @@ impl MonoDecoder {
     /// Returns `Ok(false)` at the end of the stream.
     pub fn next_block(&mut self, out: &mut Vec<f32>) -> Result<bool> {
         loop {
-            let packet = match self.format.next_packet() {
-                Ok(Some(p)) => p,
-                Ok(None) => {
-                    self.check_complete()?;
-                    return Ok(false);
-                }
-                Err(SymError::IoError(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-                    // The container promised more bytes than the file has. A missing tail is
-                    // lost music: say so rather than silently analysing part of the song.
-                    if self.decoded_any {
-                        return Err(self.truncated(format!(
-                            "stream ends inside a packet after {:.2} s of audio",
-                            self.decoded_seconds()
-                        )));
+            let format = &mut self.format;
+            let packet =
+                match decoder_call(&self.path, "reading a packet", || format.next_packet())? {
+                    Ok(Some(p)) => p,
+                    Ok(None) => {
+                        self.check_complete()?;
+                        return Ok(false);
                     }
-                    return Err(self.corrupt(e.to_string()));
-                }
-                Err(SymError::ResetRequired) => {
-                    return Err(self.corrupt("stream changes its format mid-file".into()));
-                }
-                Err(e) => return Err(self.corrupt(e.to_string())),
-            };
+                    Err(SymError::IoError(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                        // The container promised more bytes than the file has. A missing tail is
+                        // lost music: say so rather than silently analysing part of the song.
+                        if self.decoded_any {
+                            return Err(self.truncated(format!(
+                                "stream ends inside a packet after {:.2} s of audio",
+                                self.decoded_seconds()
+                            )));
+                        }
+                        return Err(self.corrupt(e.to_string()));
+                    }
+                    Err(SymError::ResetRequired) => {
+                        return Err(self.corrupt("stream changes its format mid-file".into()));
+                    }
+                    Err(e) => return Err(self.corrupt(e.to_string())),
+                };
             if packet.track_id != self.track_id {
                 continue;
             }
-            let buf = match self.decoder.decode(&packet) {
+            let decoder = &mut self.decoder;
+            let buf = match decoder_call(&self.path, "decoding a packet", || {
+                decoder.decode(&packet)
+            })? {
                 Ok(buf) => buf,
                 Err(SymError::DecodeError(e)) => {
                     self.skipped_packets += 1;
@@ -288,6 +314,25 @@ impl MonoDecoder {
     }
 }
 
+/// Runs one call into symphonia, turning a panic inside it into an error that names the file.
+///
+/// symphonia is the one dependency that parses songs from anyone (web uploads, batch folders);
+/// a bug in it on one hostile file must cost that file, not the server or the batch. After a
+/// panic the reader's state is unknown; the error ends the decode, as every decode error does.
+fn decoder_call<T>(path: &Path, what: &str, call: impl FnOnce() -> T) -> Result<T> {
+    catch_unwind(AssertUnwindSafe(call)).map_err(|panic| {
+        let detail = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        MusicError::Corrupt {
+            path: path.to_path_buf(),
+            reason: format!("the audio decoder failed while {what} ({detail})"),
+        }
+    })
+}
+
 /// Averages interleaved channels in float32, the way `numpy.mean(y, axis=0)` does for few channels.
 fn mix_to_mono(interleaved: &[f32], channels: usize, out: &mut Vec<f32>) {
     if channels == 1 {
@@ -322,4 +367,25 @@ fn finish(dec: &MonoDecoder, out: Vec<f32>) -> Result<(Vec<f32>, u32)> {
         });
     }
     Ok((out, dec.sample_rate))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_inside_the_decoder_is_the_files_error() {
+        let path = Path::new("songs/hostile.wav");
+        let err = decoder_call(path, "reading a packet", || -> u32 {
+            panic!("attempt to multiply with overflow")
+        })
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            err,
+            "songs/hostile.wav: audio stream is corrupt or truncated: the audio decoder failed \
+             while reading a packet (attempt to multiply with overflow)"
+        );
+        assert_eq!(decoder_call(path, "x", || 7).unwrap(), 7);
+    }
 }

@@ -31,6 +31,7 @@ pub mod stft;
 pub mod tcdiff;
 pub mod tempo;
 pub mod tuning;
+pub mod wav_guard;
 
 pub use error::{MusicError, Result};
 pub use load::{Audio, load};
