@@ -127,7 +127,34 @@ impl NodeTree {
         let (w, f) = tree.world(&tree.rest, &tree.order);
         tree.rest_world = w;
         tree.rest_frame = f;
+        tree.check_rest_bounds()?;
         Ok(tree)
+    }
+
+    /// Every node's rest position is finite and within
+    /// [`dancegen_motion::body_bounds::MAX_JOINT_DISTANCE_M`] of the origin (glTF is in
+    /// metres): a character is a body on a floor, and farther values are garbage that would
+    /// overflow the retargeting's float32 output.
+    fn check_rest_bounds(&self) -> Result<(), String> {
+        use dancegen_motion::body_bounds::{MAX_JOINT_DISTANCE_M, distance_from_origin};
+        for k in 0..self.len() {
+            let [x, y, z] = self.rest_position(k);
+            let distance = distance_from_origin([x, y, z]);
+            if !distance.is_finite() {
+                return Err(format!(
+                    "node {}: its rest position [{x:e}, {y:e}, {z:e}] is not finite",
+                    self.label(k)
+                ));
+            }
+            if distance > MAX_JOINT_DISTANCE_M {
+                return Err(format!(
+                    "node {}: its rest position is {distance:.4e} m from the origin; a character \
+                     stays within {MAX_JOINT_DISTANCE_M} m (MAX_JOINT_DISTANCE_M)",
+                    self.label(k)
+                ));
+            }
+        }
+        Ok(())
     }
 
     pub fn len(&self) -> usize {
@@ -313,5 +340,36 @@ mod tests {
         assert!(NodeTree::from_json(&cycle).is_err());
         let bad = json!({"nodes": [{"rotation": [0, 0, 0]}]});
         assert!(NodeTree::from_json(&bad).unwrap_err().contains("node 0"));
+    }
+
+    #[test]
+    fn nodes_beyond_the_distance_bound_are_refused() {
+        let huge = json!({"nodes": [
+            {"name": "root", "children": [1]},
+            {"name": "hand", "translation": [1e308, 0, 0]}
+        ]});
+        let e = NodeTree::from_json(&huge).unwrap_err();
+        assert!(
+            e.starts_with("node hand:") && e.contains("1.0000e308 m"),
+            "{e}"
+        );
+        // Each transform is finite; their product in world space is not.
+        let overflow = json!({"nodes": [
+            {"scale": [1e300, 1e300, 1e300], "children": [1]},
+            {"name": "tip", "translation": [1e10, 0, 0]}
+        ]});
+        let e = NodeTree::from_json(&overflow).unwrap_err();
+        assert!(
+            e.starts_with("node tip:") && e.contains("not finite"),
+            "{e}"
+        );
+        let far = json!({"nodes": [
+            {"name": "hips", "translation": [0, 1, 0], "children": [1]},
+            {"name": "hand", "translation": [0, 0, 2e4]}
+        ]});
+        let e = NodeTree::from_json(&far).unwrap_err();
+        assert!(e.contains("hand") && e.contains("2.0000e4 m"), "{e}");
+        let near = json!({"nodes": [{"translation": [9000, 0, 0]}]});
+        assert!(NodeTree::from_json(&near).is_ok());
     }
 }

@@ -106,27 +106,12 @@ fn characters_that_cannot_dance_are_named() {
         "-o",
         figure.to_str().unwrap(),
     ]));
-    let bytes = std::fs::read(&figure).unwrap();
-    let mut json = glb_json(&bytes);
-    for (i, node) in json["nodes"].as_array_mut().unwrap().iter_mut().enumerate() {
-        node["name"] = format!("bone{i}").into();
-    }
-    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let bin = &bytes[20 + json_len..];
-    let mut text = serde_json::to_vec(&json).unwrap();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + text.len() + bin.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&text);
-    glb.extend_from_slice(bin);
     let anonymous = dir.path().join("anonymous.glb");
-    std::fs::write(&anonymous, glb).unwrap();
+    rewrite_glb_json(&figure, &anonymous, |json| {
+        for (i, node) in json["nodes"].as_array_mut().unwrap().iter_mut().enumerate() {
+            node["name"] = format!("bone{i}").into();
+        }
+    });
     let e = run(anonymous.to_str().unwrap(), &[out_s]);
     assert!(e.contains("anonymous.glb") && e.contains("bone3"), "{e}");
 
@@ -164,4 +149,43 @@ fn characters_that_cannot_dance_are_named() {
     let bvh = dir.path().join("x.bvh");
     let e = run(&robot(), &[bvh.to_str().unwrap()]);
     assert!(e.contains("add -o NAME.glb"), "{e}");
+
+    // A joint 20 km from the origin in the rest pose is not a character standing on a floor.
+    let far = dir.path().join("far.glb");
+    rewrite_glb_json(&figure, &far, |json| {
+        let nodes = json["nodes"].as_array_mut().unwrap();
+        let wrist = nodes.iter_mut().find(|n| n["name"] == "lwrist").unwrap();
+        wrist["translation"] = serde_json::json!([0.0, 0.0, 2.0e4]);
+    });
+    let e = run(far.to_str().unwrap(), &[out_s]);
+    assert!(
+        e.contains("far.glb") && e.contains("lwrist") && e.contains("MAX_JOINT_DISTANCE_M"),
+        "{e}"
+    );
+}
+
+/// Writes `from`'s GLB to `to` with its JSON chunk changed by `edit` (the binary chunk kept).
+fn rewrite_glb_json(
+    from: &std::path::Path,
+    to: &std::path::Path,
+    edit: impl FnOnce(&mut serde_json::Value),
+) {
+    let bytes = std::fs::read(from).unwrap();
+    let mut json = glb_json(&bytes);
+    edit(&mut json);
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let bin = &bytes[20 + json_len..];
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((12 + 8 + text.len() + bin.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&text);
+    glb.extend_from_slice(bin);
+    std::fs::write(to, glb).unwrap();
 }

@@ -227,6 +227,17 @@ fn clip_of(
         (None, None, Some(p)) => p,
         (None, None, None) => bail!("a .npy stores no frame rate: give --fps"),
     };
+    // One body per dancer, within the bounds every motion reader applies (the .npy joints and
+    // arrays read here do not pass through the motion library).
+    for (i, d) in raw.iter().enumerate() {
+        dancegen_formats::body_check::joint_array(d, joints).map_err(|e| {
+            if raw.len() > 1 {
+                anyhow::anyhow!("dancer {i}, {e}")
+            } else {
+                anyhow::anyhow!("{e}")
+            }
+        })?;
+    }
     let as_given = Protocol {
         root: RootHandling::AsGiven,
         ..*protocol

@@ -138,7 +138,10 @@ pub fn load_motion_file(path: &Path) -> Result<LoadedMotion, FormatError> {
     load_motion_file_with(path, &LoadOptions::default())
 }
 
-/// Reads any supported motion file, at [`LoadOptions::source_fps`] when it is given.
+/// Reads any supported motion file, at [`LoadOptions::source_fps`] when it is given. A motion
+/// that is not one body (a value that is not finite, a joint beyond
+/// [`dancegen_motion::body_bounds::MAX_JOINT_DISTANCE_M`], a bone that stretches past
+/// [`dancegen_motion::body_bounds::MAX_BONE_STRETCH_M`]) is refused, naming the frame and joint.
 pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMotion, FormatError> {
     if let Some(fps) = opts.source_fps {
         check_source_fps(fps).map_err(|e| err(path, format!("the given rate: {e}")))?;
@@ -209,6 +212,7 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
             LoadedMotion::Bvh(_) => {}
         }
     }
+    crate::body_check::check_loaded(&loaded).map_err(|e| err(path, e))?;
     Ok(loaded)
 }
 
@@ -236,8 +240,8 @@ fn load_npy(path: &Path) -> Result<LoadedMotion, FormatError> {
             .and_then(|m| m.to_smpl24())
             .map(LoadedMotion::Smpl)
             .map_err(|e| err(path, e)),
-        [t, j, 3] if *t > 0 && *j > 0 => joints_npy(path, &a.data, 1, *j),
-        [n, t, j, 3] if *n > 0 && *t > 0 && *j > 0 => joints_npy(path, &a.data, *n, *j),
+        [t, j, 3] if *t > 0 && *j > 0 => Ok(joints_npy(&a.data, 1, *j)),
+        [n, t, j, 3] if *n > 0 && *t > 0 && *j > 0 => Ok(joints_npy(&a.data, *n, *j)),
         shape => Err(err(
             path,
             format!(
@@ -248,22 +252,16 @@ fn load_npy(path: &Path) -> Result<LoadedMotion, FormatError> {
     }
 }
 
-fn joints_npy(
-    path: &Path,
-    data: &[f64],
-    dancers: usize,
-    joints: usize,
-) -> Result<LoadedMotion, FormatError> {
+fn joints_npy(data: &[f64], dancers: usize, joints: usize) -> LoadedMotion {
+    // Finite values, near the origin, one body: checked with every format's motion, in
+    // `load_motion_file_with`.
     let positions: Vec<f32> = data.iter().map(|&v| v as f32).collect();
-    if positions.iter().any(|v| !v.is_finite()) {
-        return Err(err(path, "joint positions contain NaN or infinity"));
-    }
-    Ok(LoadedMotion::Joints {
+    LoadedMotion::Joints {
         fps: NPY_DEFAULT_FPS,
         dancers,
         joints,
         positions,
-    })
+    }
 }
 
 /// Options of [`convert_motion`].

@@ -8,6 +8,7 @@
 //! fit reads the file's own joint names and rest pose. [`rig`] renames the SMPL 24 skeleton for
 //! the tools that import our files (Mixamo, UE5, VRM bone names).
 pub mod aistpp;
+pub mod body_check;
 pub mod bvh;
 pub mod bvh_motion;
 pub(crate) mod capsule_mesh;

@@ -5,6 +5,7 @@
 //! `dancegen-formats`), fits no character (`dancegen-character`) and refines no dance
 //! (`dancegen-refine`). Conventions (axes, units, frame rates, the 6D rotation layout) are
 //! stated once, in [`conventions`]; importers and exporters convert at the edge.
+pub mod body_bounds;
 pub mod capsule_body;
 pub mod conventions;
 pub mod face;
