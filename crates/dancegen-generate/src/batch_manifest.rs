@@ -1,4 +1,4 @@
-//! The batch manifest: one JSON object per line, each a `generate` call.
+//! The batch manifest (`dancegen batch`): one JSON object per line, each a `generate` call.
 //!
 //! A line's keys are `generate`'s options by their long names (`snake_case` or `kebab-case`),
 //! plus `id` (required; the song's folder under `--out`), `song` and `outputs` (file names).
@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Map, Value};
 
-use dancegen_generate::flags::GenerateFlags;
+use crate::flags::GenerateFlags;
 
 /// `generate` options a batch decides itself.
 const RESERVED_KEYS: [&str; 3] = ["output", "o", "progress"];
@@ -170,7 +170,7 @@ fn take_outputs(fields: &mut Map<String, Value>) -> Result<Vec<String>, String> 
 /// `generate`'s argument list for a line's remaining keys (the song last, after `--`); paths
 /// resolved against the manifest's folder.
 fn generate_args(fields: &Map<String, Value>, base: &Path) -> Result<Vec<String>, String> {
-    dancegen_generate::flags::args_from_named(
+    crate::flags::args_from_named(
         fields,
         &RESERVED_KEYS,
         "is set by the batch (list file names in \"outputs\")",
@@ -204,7 +204,7 @@ fn resolve(base: &Path, path: &str) -> Result<String, String> {
 
 /// Parses an argument list as `dancegen generate` would.
 pub fn parse_generate_args(args: &[String]) -> Result<GenerateFlags, String> {
-    dancegen_generate::flags::parse(args)
+    crate::flags::parse(args)
 }
 
 #[cfg(test)]

@@ -28,6 +28,7 @@
 //! # Ok::<(), dancegen_generate::GenerateError>(())
 //! ```
 
+pub mod batch_manifest;
 pub mod beat_align;
 pub mod edit;
 pub mod error;

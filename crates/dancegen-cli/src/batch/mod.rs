@@ -9,7 +9,6 @@
 //! - Every song gets one line in `DIR/results.jsonl` per run, generated, skipped or failed;
 //!   one failed song does not stop the others, and the exit status is non-zero at the end.
 
-mod manifest;
 mod record;
 
 use std::path::Path;
@@ -21,7 +20,7 @@ use anyhow::{Context, Result, bail};
 use dancegen_generate::{CancelToken, Generator, ModelLocator};
 
 use crate::cli::{BatchArgs, Shard};
-use manifest::{BadLine, Entry};
+use dancegen_generate::batch_manifest::{self as manifest, BadLine, Entry};
 use record::{Done, Outcome};
 
 /// Tallies for the closing summary.
