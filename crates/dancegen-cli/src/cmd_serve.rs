@@ -25,6 +25,11 @@ pub fn run(args: &ServeArgs, quiet: bool) -> Result<()> {
     if args.max_upload_mb == 0 || args.max_queue == 0 {
         bail!("--max-upload-mb and --max-queue must be at least 1");
     }
+    let disk_bytes = match args.max_disk_gb {
+        None => None,
+        Some(gb) if gb.is_finite() && gb > 0.0 && gb <= 1e6 => Some((gb * 1e9) as u64),
+        Some(gb) => bail!("--max-disk-gb {gb}: need a positive number of gigabytes"),
+    };
     let mut models = Vec::new();
     for dir in &args.models {
         let kind = model_kind(dir)
@@ -37,6 +42,15 @@ pub fn run(args: &ServeArgs, quiet: bool) -> Result<()> {
         })?;
         models.push((system.name.to_string(), PathBuf::from(dir)));
     }
+    let admin = match &args.admin_token_file {
+        None => dancegen_server::owner::AdminKey::none(),
+        Some(f) => {
+            let token = std::fs::read_to_string(f)
+                .with_context(|| format!("--admin-token-file {}: cannot read it", f.display()))?;
+            dancegen_server::owner::AdminKey::from_token(&token)
+                .map_err(|e| anyhow!("--admin-token-file {}: {e}", f.display()))?
+        }
+    };
     let config = ServeConfig {
         addr: args.addr,
         data_dir: data_dir.clone(),
@@ -45,12 +59,16 @@ pub fn run(args: &ServeArgs, quiet: bool) -> Result<()> {
             upload_bytes: args.max_upload_mb << 20,
             song_seconds: args.max_song_seconds,
             queue_length: args.max_queue,
+            jobs_per_minute: args.max_jobs_per_minute as usize,
+            streams_per_client: args.max_streams_per_client as usize,
+            disk_bytes,
             ..Limits::default()
         },
         models,
         keep: args
             .keep_days
             .map(|d| std::time::Duration::from_secs(u64::from(d) * 86_400)),
+        admin,
     };
     dancegen_server::run(config, |addr| {
         if !quiet {

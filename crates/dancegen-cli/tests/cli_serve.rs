@@ -151,7 +151,9 @@ fn fifty_jobs_and_a_thousand_status_requests_lose_nothing() {
         .lock()
         .unwrap_or_else(|e| e.into_inner());
     let data = tempfile::tempdir().unwrap();
-    let server = ServeProcess::start(data.path(), &[]);
+    // Fifty people's submissions, from one address on loopback: the per-address job limit
+    // (10 a minute by default) would refuse them, so it is raised here.
+    let server = ServeProcess::start(data.path(), &["--max-jobs-per-minute", "100"]);
     let song = Arc::new(std::fs::read(demo_song()).unwrap());
 
     // 50 submissions at once, each with its own seed.

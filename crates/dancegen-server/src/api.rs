@@ -13,12 +13,13 @@
 //! - anything else → the embedded viewer ([`crate::web`])
 
 use std::convert::Infallible;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::sync::{Arc, Mutex};
 
 use axum::body::Body;
 use axum::extract::multipart::MultipartRejection;
-use axum::extract::{DefaultBodyLimit, FromRequest, Multipart, Path, Request, State};
-use axum::http::{HeaderValue, StatusCode, header};
+use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRequest, Multipart, Path, Request, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::middleware::{self, Next};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
@@ -31,6 +32,7 @@ use tower_http::services::ServeFile;
 use tower_http::timeout::{RequestBodyDeadlineLayer, TimeoutLayer};
 
 use crate::catalog::Catalog;
+use crate::client_limits::ClientLimits;
 use crate::config::{Limits, SSE_KEEP_ALIVE};
 use crate::edit_job;
 use crate::error::ApiError;
@@ -38,6 +40,7 @@ use crate::files;
 use crate::job::{JobParams, JobState};
 use crate::jobs::Jobs;
 use crate::library;
+use crate::owner::{self, AdminKey, Caller};
 use crate::upload;
 use crate::{download_all, download_names};
 
@@ -50,6 +53,18 @@ pub struct AppState {
     /// Makes "count the queue, then add a job" one step, so the queue limit holds under
     /// concurrent submissions.
     pub submit_lock: Arc<Mutex<()>>,
+    /// The administrator's token ([`crate::owner`]).
+    pub admin: AdminKey,
+    /// Jobs per minute and open streams per client address.
+    pub clients: Arc<ClientLimits>,
+}
+
+/// The client's address (the TCP peer), for the per-client limits; unspecified when the
+/// server was not started with connection info (never in `serve`).
+fn peer_of(extensions: &axum::http::Extensions) -> IpAddr {
+    extensions
+        .get::<ConnectInfo<SocketAddr>>()
+        .map_or(IpAddr::V4(Ipv4Addr::UNSPECIFIED), |c| c.0.ip())
 }
 
 /// Room for the multipart framing and the params part on top of the upload limit.
@@ -81,10 +96,17 @@ pub fn router(state: AppState) -> Router {
             limits.request_timeout,
         ))
         .layer(DefaultBodyLimit::max(FORM_OVERHEAD));
+    let policy = HeaderValue::from_str(&crate::headers::content_security_policy(
+        crate::web::import_map().as_deref(),
+    ))
+    .expect("the policy is ASCII");
     upload
         .merge(rest)
         .with_state(state)
         .layer(middleware::from_fn(json_errors))
+        .layer(middleware::from_fn(move |req, next| {
+            crate::headers::add(policy.clone(), req, next)
+        }))
 }
 
 /// Errors made by the layers (a timeout, a body over the limit) get the same JSON body as
@@ -101,7 +123,14 @@ async fn json_errors(req: Request, next: Next) -> Response {
             StatusCode::REQUEST_TIMEOUT => "the request took too long (the upload deadline or \
                                             the request timeout passed)"
                 .to_string(),
-            StatusCode::PAYLOAD_TOO_LARGE => "the request body is larger than the limit".into(),
+            StatusCode::PAYLOAD_TOO_LARGE => {
+                return ApiError::limit(
+                    status,
+                    "max-upload-mb",
+                    "the request body is larger than the limit (--max-upload-mb)",
+                )
+                .into_response();
+            }
             s => s.canonical_reason().unwrap_or("bad request").to_string(),
         };
         return ApiError::new(status, words).into_response();
@@ -127,6 +156,8 @@ async fn submit(
     State(s): State<AppState>,
     req: Request,
 ) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
+    let caller = owner::caller(req.headers(), &s.admin)?;
+    let peer = peer_of(req.extensions());
     let limit = s.limits.upload_bytes;
     let declared = req
         .headers()
@@ -148,8 +179,9 @@ async fn submit(
                 }
             });
         }
-        return Err(ApiError::new(
+        return Err(ApiError::limit(
             StatusCode::PAYLOAD_TOO_LARGE,
+            "max-upload-mb",
             format!(
                 "upload of {:.1} MB is larger than the limit of {} MB",
                 n as f64 / (1 << 20) as f64,
@@ -164,10 +196,15 @@ async fn submit(
     // After the body is read, so the client (a browser still sending the song) gets the 429
     // rather than a connection closed under it; before the song is decoded, so a full queue
     // costs no decoding. Checked again when the job is added.
-    check_queue(&s)?;
+    check_queue(&s, peer)?;
+    check_disk(&s).await?;
     // An edit takes its song, leader, system and span from the job it edits.
     let edited = match &up.params.edit {
-        Some(e) => Some((edit_job::edited_job(&s.jobs, e)?, e.clone())),
+        Some(e) => {
+            let row = edit_job::edited_job(&s.jobs, e)?;
+            owner::may_change(&caller, &row, "edit this dance")?;
+            Some((row, e.clone()))
+        }
         None => None,
     };
     let params = match &edited {
@@ -187,8 +224,9 @@ async fn submit(
     if let Some(song) = &up.song
         && song.bytes.len() > limit
     {
-        return Err(ApiError::new(
+        return Err(ApiError::limit(
             StatusCode::PAYLOAD_TOO_LARGE,
+            "max-upload-mb",
             format!("the song is larger than the limit of {} MB", limit >> 20),
         ));
     }
@@ -196,7 +234,7 @@ async fn submit(
 
     // Files first, in a hidden folder renamed into place, then the row: a crash in between
     // leaves no half job.
-    let id = s.jobs.new_id();
+    let id = s.jobs.new_id()?;
     let jobs_dir = files::jobs_dir(s.jobs.data_dir());
     let incoming = jobs_dir.join(format!(".incoming-{id}"));
     let (song_name, leader_name) = match (&edited, &up.song) {
@@ -255,8 +293,31 @@ async fn submit(
         params,
         song: song_name,
         leader: leader_name,
+        owner: NewOwner::of(&caller)?,
+        peer,
     };
     enqueue(&s, job, prepared)
+}
+
+/// Who a new job belongs to: the caller's owner secret, a new one for a caller without, none
+/// for the administrator.
+struct NewOwner {
+    key: Option<String>,
+    secret: Option<String>,
+}
+
+impl NewOwner {
+    fn of(caller: &Caller) -> Result<Self, ApiError> {
+        let secret = match caller {
+            Caller::Admin => None,
+            Caller::Owner { secret, .. } => Some(secret.clone()),
+            Caller::Anonymous => Some(owner::new_secret()?),
+        };
+        Ok(NewOwner {
+            key: secret.as_deref().map(owner::owner_key),
+            secret,
+        })
+    }
 }
 
 /// A job whose files are ready in its hidden `incoming` folder.
@@ -266,9 +327,12 @@ struct NewJob {
     params: JobParams,
     song: String,
     leader: Option<String>,
+    owner: NewOwner,
+    /// The client address it counts against ([`ClientLimits`]).
+    peer: IpAddr,
 }
 
-/// Moves a prepared job's folder into place and queues it (`202 {"id"}`), or, when preparing
+/// Moves a prepared job's folder into place and queues it (`202 {"id", "owner"}`), or, when preparing
 /// it failed or the queue is full, removes what was prepared.
 fn enqueue(
     s: &AppState,
@@ -277,12 +341,16 @@ fn enqueue(
 ) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
     let queued = prepared.and_then(|()| {
         let _one_at_a_time = s.submit_lock.lock().unwrap_or_else(|e| e.into_inner());
-        check_queue(s).and_then(|()| {
+        check_queue(s, job.peer).and_then(|()| {
             std::fs::rename(&job.incoming, s.jobs.job_dir(&job.id))
                 .map_err(|e| ApiError::internal(format!("saving the upload: {e}")))?;
-            s.jobs
-                .store
-                .insert(&job.id, &job.params, &job.song, job.leader.as_deref())?;
+            s.jobs.store.insert(
+                &job.id,
+                &job.params,
+                &job.song,
+                job.leader.as_deref(),
+                job.owner.key.as_deref(),
+            )?;
             Ok(())
         })
     });
@@ -292,17 +360,33 @@ fn enqueue(
         let _ = std::fs::remove_dir_all(s.jobs.job_dir(&id));
         return Err(e);
     }
+    s.clients.count_job(job.peer);
     tracing::info!("job {id}: queued ({})", job.params.system);
     s.jobs.publish(&id);
     s.jobs.notify_work();
-    Ok((StatusCode::ACCEPTED, Json(serde_json::json!({ "id": id }))))
+    let reply = match job.owner.secret {
+        Some(secret) => serde_json::json!({ "id": id, "owner": secret }),
+        None => serde_json::json!({ "id": id }),
+    };
+    Ok((StatusCode::ACCEPTED, Json(reply)))
 }
 
-/// `GET /api/jobs`: the library.
-async fn library(State(s): State<AppState>) -> Result<Json<serde_json::Value>, ApiError> {
-    let jobs = tokio::task::spawn_blocking(move || s.jobs.library(library::LIBRARY_LIMIT))
-        .await
-        .map_err(|e| ApiError::internal(format!("listing the jobs: {e}")))??;
+/// `GET /api/jobs`: the library: the caller's jobs (every job for the administrator, none
+/// without an owner secret).
+async fn library(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let owner = match owner::caller(&headers, &s.admin)? {
+        Caller::Anonymous => return Ok(Json(serde_json::json!({ "jobs": [] }))),
+        Caller::Owner { key, .. } => Some(key),
+        Caller::Admin => None,
+    };
+    let jobs = tokio::task::spawn_blocking(move || {
+        s.jobs.library(library::LIBRARY_LIMIT, owner.as_deref())
+    })
+    .await
+    .map_err(|e| ApiError::internal(format!("listing the jobs: {e}")))??;
     Ok(Json(serde_json::json!({ "jobs": jobs })))
 }
 
@@ -315,8 +399,10 @@ struct Rename {
 async fn rename(
     State(s): State<AppState>,
     Path(id): Path<String>,
+    headers: HeaderMap,
     body: Result<Json<Rename>, axum::extract::rejection::JsonRejection>,
 ) -> Result<Json<crate::job::JobView>, ApiError> {
+    let caller = owner::caller(&headers, &s.admin)?;
     let Json(body) = body.map_err(|e| {
         ApiError::field(
             "name",
@@ -324,7 +410,9 @@ async fn rename(
         )
     })?;
     let name = library::checked_name(body.name.as_deref())?;
-    if !files::valid_id(&id) || !s.jobs.store.rename(&id, name.as_deref())? {
+    let row = existing(&s, &id)?;
+    owner::may_change(&caller, &row, "rename this dance")?;
+    if !s.jobs.store.rename(&id, name.as_deref())? {
         return Err(no_job(&id));
     }
     s.jobs.publish(&id);
@@ -341,8 +429,12 @@ struct Again {
 async fn again(
     State(s): State<AppState>,
     Path(id): Path<String>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    headers: HeaderMap,
     body: axum::body::Bytes,
 ) -> Result<(StatusCode, Json<serde_json::Value>), ApiError> {
+    let caller = owner::caller(&headers, &s.admin)?;
+    let peer = peer.ip();
     // No body, or JSON `{"seed": N}`; anything else is said in words.
     let seed = if body.iter().all(u8::is_ascii_whitespace) {
         None
@@ -356,14 +448,13 @@ async fn again(
             })?
             .seed
     };
-    if !files::valid_id(&id) {
-        return Err(no_job(&id));
-    }
-    let row = s.jobs.store.get(&id)?.ok_or_else(|| no_job(&id))?;
+    let row = existing(&s, &id)?;
+    owner::may_change(&caller, &row, "make this dance again")?;
     let params = library::again_params(&row, seed)?;
     s.catalog.check(&params)?;
-    check_queue(&s)?;
-    let new_id = s.jobs.new_id();
+    check_queue(&s, peer)?;
+    check_disk(&s).await?;
+    let new_id = s.jobs.new_id()?;
     let incoming = files::jobs_dir(s.jobs.data_dir()).join(format!(".incoming-{new_id}"));
     let from = s.jobs.job_dir(&id);
     let job = NewJob {
@@ -372,6 +463,8 @@ async fn again(
         params,
         song: row.song.clone(),
         leader: row.leader.clone(),
+        owner: NewOwner::of(&caller)?,
+        peer,
     };
     let copied = tokio::task::spawn_blocking(move || library::copy_inputs(&from, &row, &incoming))
         .await
@@ -379,11 +472,14 @@ async fn again(
     enqueue(&s, job, copied)
 }
 
-fn check_queue(s: &AppState) -> Result<(), ApiError> {
+/// The queue's room and the client's jobs per minute.
+fn check_queue(s: &AppState, peer: IpAddr) -> Result<(), ApiError> {
+    s.clients.check_job(peer)?;
     let active = s.jobs.store.active_count()?;
     if active >= s.limits.queue_length {
-        return Err(ApiError::new(
+        return Err(ApiError::limit(
             StatusCode::TOO_MANY_REQUESTS,
+            "max-queue",
             format!(
                 "the queue is full ({active} jobs waiting or running, the limit is {}); \
                  try again when some have finished",
@@ -394,8 +490,41 @@ fn check_queue(s: &AppState) -> Result<(), ApiError> {
     Ok(())
 }
 
+/// 507 when the job folders hold `--max-disk-gb` or more. Nothing is removed to make room:
+/// old jobs go only by `--keep-days` or by their owners.
+async fn check_disk(s: &AppState) -> Result<(), ApiError> {
+    let Some(max) = s.limits.disk_bytes else {
+        return Ok(());
+    };
+    let dir = files::jobs_dir(s.jobs.data_dir());
+    let used = tokio::task::spawn_blocking(move || files::dir_bytes(&dir))
+        .await
+        .map_err(|e| ApiError::internal(format!("measuring the job folders: {e}")))?;
+    if used >= max {
+        return Err(ApiError::limit(
+            StatusCode::INSUFFICIENT_STORAGE,
+            "max-disk-gb",
+            format!(
+                "the dances on this server use {:.2} GB, the limit (--max-disk-gb {:.2}); \
+                 delete some in My dances, or ask whoever runs it for room",
+                used as f64 / 1e9,
+                max as f64 / 1e9
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn no_job(id: &str) -> ApiError {
     ApiError::not_found(format!("no job {id}"))
+}
+
+/// The row of job `id`, or the 404.
+fn existing(s: &AppState, id: &str) -> Result<crate::store::JobRow, ApiError> {
+    if !files::valid_id(id) {
+        return Err(no_job(id));
+    }
+    s.jobs.store.get(id)?.ok_or_else(|| no_job(id))
 }
 
 async fn status(
@@ -417,7 +546,19 @@ async fn versions(
     Ok(Json(serde_json::json!({ "versions": list })))
 }
 
-async fn delete(State(s): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+async fn delete(
+    State(s): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
+    let caller = owner::caller(&headers, &s.admin)?;
+    let row = existing(&s, &id)?;
+    let action = if row.state.is_final() {
+        "delete this dance"
+    } else {
+        "cancel this job"
+    };
+    owner::may_change(&caller, &row, action)?;
     match s.jobs.cancel_or_remove(&id)? {
         None => Err(no_job(&id)),
         Some(Some(view)) => Ok((StatusCode::ACCEPTED, Json(view)).into_response()),
@@ -428,11 +569,15 @@ async fn delete(State(s): State<AppState>, Path(id): Path<String>) -> Result<Res
 async fn events(
     State(s): State<AppState>,
     Path(id): Path<String>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
 ) -> Result<Sse<impl tokio_stream::Stream<Item = Result<Event, Infallible>>>, ApiError> {
     let rx = s.jobs.subscribe(&id)?.ok_or_else(|| no_job(&id))?;
+    // Held by the stream: the slot comes back when the client goes.
+    let slot = s.clients.open_stream(peer.ip())?;
     // A watch stream yields the current object first, then every change (intermediate ones
     // are skipped when the client is slower than the job, which is what a progress bar wants).
-    let stream = WatchStream::new(rx).map(|view| {
+    let stream = WatchStream::new(rx).map(move |view| {
+        let _held = &slot;
         Ok(Event::default()
             .json_data(&view)
             .unwrap_or_else(|_| Event::default().comment("unserialisable job")))
@@ -463,8 +608,11 @@ async fn file(
         .await
         .map_err(|e| ApiError::internal(format!("reading {name}: {e}")))?;
     let mut res = res.map(Body::new);
-    if let Some(n) = download
-        && let Ok(v) = HeaderValue::from_str(&download_names::content_disposition("inline", &n))
+    // Always an attachment: a file from a job is downloaded, never shown as a page of this
+    // site (the viewer's `fetch` and `<audio>` ignore the header). Dance files under their
+    // download name, the others (song, thumbnail, timeline) under their own.
+    let shown = download.unwrap_or_else(|| name.clone());
+    if let Ok(v) = HeaderValue::from_str(&download_names::content_disposition("attachment", &shown))
     {
         res.headers_mut().insert(header::CONTENT_DISPOSITION, v);
     }

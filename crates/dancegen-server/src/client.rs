@@ -30,10 +30,16 @@ impl Reply {
 
 /// Talks to the server at `base` (`http://127.0.0.1:8080`); 4xx and 5xx are replies, not
 /// errors, so callers can check them.
+///
+/// Like the web page, a client keeps the owner secret its first job returned and sends it with
+/// every later request (`Authorization: Bearer`), so it may delete and list its own jobs;
+/// [`Client::with_token`] starts from a given secret or the administrator's token instead.
+/// Clones share the secret.
 #[derive(Clone)]
 pub struct Client {
     pub base: String,
     agent: ureq::Agent,
+    token: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 /// Longest any one exchange may take (a 64 MB upload on loopback takes well under this).
@@ -71,6 +77,38 @@ impl Client {
                 .timeout_global(Some(EXCHANGE_TIMEOUT))
                 .build()
                 .into(),
+            token: Default::default(),
+        }
+    }
+
+    /// A client that sends `token` (an owner secret or the administrator's token).
+    pub fn with_token(base: impl Into<String>, token: &str) -> Self {
+        let c = Self::new(base);
+        *c.token_slot() = Some(token.to_string());
+        c
+    }
+
+    /// The secret or token this client sends, if any.
+    pub fn token(&self) -> Option<String> {
+        self.token_slot().clone()
+    }
+
+    fn token_slot(&self) -> std::sync::MutexGuard<'_, Option<String>> {
+        self.token.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Adds the `Authorization` header when the client has a token.
+    fn authorised<B>(&self, r: ureq::RequestBuilder<B>) -> ureq::RequestBuilder<B> {
+        match self.token() {
+            Some(t) => r.header("Authorization", &format!("Bearer {t}")),
+            None => r,
+        }
+    }
+
+    /// Keeps the owner secret of a job this client made (when it has none yet).
+    fn remember_owner(&self, r: &Reply) {
+        if let Some(secret) = r.json.get("owner").and_then(Value::as_str) {
+            self.token_slot().get_or_insert_with(|| secret.to_string());
         }
     }
 
@@ -79,20 +117,19 @@ impl Client {
     }
 
     pub fn get(&self, path: &str) -> Result<Reply, String> {
-        reply(self.agent.get(&self.url(path)).call())
+        reply(self.authorised(self.agent.get(&self.url(path))).call())
     }
 
     pub fn get_range(&self, path: &str, range: &str) -> Result<Reply, String> {
         reply(
-            self.agent
-                .get(&self.url(path))
+            self.authorised(self.agent.get(&self.url(path)))
                 .header("Range", range)
                 .call(),
         )
     }
 
     pub fn delete(&self, path: &str) -> Result<Reply, String> {
-        reply(self.agent.delete(&self.url(path)).call())
+        reply(self.authorised(self.agent.delete(&self.url(path))).call())
     }
 
     /// `method` (`POST`, `PATCH`) of `path` with the JSON text `json` as its body.
@@ -104,21 +141,25 @@ impl Client {
             "PUT" => self.agent.put(&url),
             other => return Err(format!("send_json: {other} is not a method with a body")),
         };
-        reply(
-            r.header("Content-Type", "application/json")
+        let r = reply(
+            self.authorised(r)
+                .header("Content-Type", "application/json")
                 .send(json.as_bytes()),
-        )
+        )?;
+        self.remember_owner(&r);
+        Ok(r)
     }
 
     /// `POST /api/jobs` with `parts`.
     pub fn submit(&self, parts: &[Part]) -> Result<Reply, String> {
         let (content_type, body) = multipart(parts);
-        reply(
-            self.agent
-                .post(self.url("/api/jobs"))
+        let r = reply(
+            self.authorised(self.agent.post(self.url("/api/jobs")))
                 .header("Content-Type", &content_type)
                 .send(&body[..]),
-        )
+        )?;
+        self.remember_owner(&r);
+        Ok(r)
     }
 
     /// Submits the song file `song` with `params` (JSON text).

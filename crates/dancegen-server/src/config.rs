@@ -31,6 +31,13 @@ pub struct Limits {
     pub body_deadline: Duration,
     pub request_timeout: Duration,
     pub max_variations: usize,
+    /// Jobs one client address may have accepted in any minute.
+    pub jobs_per_minute: usize,
+    /// Progress streams one client address may hold open.
+    pub streams_per_client: usize,
+    /// Most bytes the job folders may hold before new jobs are refused (507); `None`: no
+    /// limit. Nothing is deleted to make room (`--keep-days` removes old jobs).
+    pub disk_bytes: Option<u64>,
 }
 
 impl Default for Limits {
@@ -42,6 +49,9 @@ impl Default for Limits {
             body_deadline: DEFAULT_BODY_DEADLINE,
             request_timeout: DEFAULT_REQUEST_TIMEOUT,
             max_variations: MAX_VARIATIONS,
+            jobs_per_minute: crate::client_limits::DEFAULT_JOBS_PER_MINUTE,
+            streams_per_client: crate::client_limits::DEFAULT_STREAMS_PER_CLIENT,
+            disk_bytes: None,
         }
     }
 }
@@ -64,6 +74,8 @@ pub struct ServeConfig {
     /// are removed with their files when the server starts and once a day while it runs
     /// (`--keep-days`). `None` keeps every job until it is deleted.
     pub keep: Option<Duration>,
+    /// The administrator's token (`--admin-token-file`): every right over every job.
+    pub admin: crate::owner::AdminKey,
 }
 
 impl ServeConfig {
@@ -75,6 +87,7 @@ impl ServeConfig {
             limits: Limits::default(),
             models: Vec::new(),
             keep: None,
+            admin: crate::owner::AdminKey::none(),
         }
     }
 }

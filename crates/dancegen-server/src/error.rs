@@ -11,6 +11,9 @@ pub struct ApiError {
     pub message: String,
     /// The request field at fault (`song`, `params`, `steps`, …), when there is one.
     pub field: Option<String>,
+    /// The server limit that refused the request (`max-queue`, `max-jobs-per-minute`, …; the
+    /// `serve` flag that sets it), when a limit did.
+    pub limit: Option<String>,
 }
 
 impl ApiError {
@@ -19,6 +22,16 @@ impl ApiError {
             status,
             message: message.into(),
             field: None,
+            limit: None,
+        }
+    }
+
+    /// A refusal by the server limit `limit` (named as its `serve` flag, without dashes in
+    /// front): JSON `{"error", "limit"}`.
+    pub fn limit(status: StatusCode, limit: &str, message: impl Into<String>) -> Self {
+        ApiError {
+            limit: Some(limit.to_string()),
+            ..Self::new(status, message)
         }
     }
 
@@ -28,6 +41,7 @@ impl ApiError {
             status: StatusCode::BAD_REQUEST,
             message: format!("{field}: {}", message.into()),
             field: Some(field.to_string()),
+            limit: None,
         }
     }
 
@@ -51,10 +65,13 @@ impl std::fmt::Display for ApiError {
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        let body = match &self.field {
-            Some(field) => serde_json::json!({"error": self.message, "field": field}),
-            None => serde_json::json!({"error": self.message}),
-        };
+        let mut body = serde_json::json!({"error": self.message});
+        if let Some(field) = &self.field {
+            body["field"] = field.as_str().into();
+        }
+        if let Some(limit) = &self.limit {
+            body["limit"] = limit.as_str().into();
+        }
         (self.status, Json(body)).into_response()
     }
 }

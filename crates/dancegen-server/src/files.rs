@@ -16,6 +16,22 @@ pub fn valid_id(id: &str) -> bool {
     !id.is_empty() && id.len() <= 64 && id.bytes().all(|b| b.is_ascii_alphanumeric())
 }
 
+/// Bytes of the regular files under `dir`, at any depth (links are not followed; unreadable
+/// entries count as 0): what `--max-disk-gb` measures.
+pub fn dir_bytes(dir: &Path) -> u64 {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .flatten()
+        .map(|e| match e.file_type() {
+            Ok(t) if t.is_dir() => dir_bytes(&e.path()),
+            Ok(t) if t.is_file() => e.metadata().map_or(0, |m| m.len()),
+            _ => 0,
+        })
+        .sum()
+}
+
 /// Whether `name` names a file directly inside a folder, and a visible one.
 pub fn valid_name(name: &str) -> bool {
     !name.is_empty()

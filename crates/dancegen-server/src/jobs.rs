@@ -5,7 +5,6 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -27,7 +26,6 @@ pub struct Jobs {
     cancels: Mutex<HashMap<String, CancelToken>>,
     /// Bumped on every submission; idle workers wait for it to change.
     work: (Mutex<u64>, Condvar),
-    next_id: AtomicU64,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -62,7 +60,6 @@ impl Jobs {
             live: Mutex::new(HashMap::new()),
             cancels: Mutex::new(HashMap::new()),
             work: (Mutex::new(0), Condvar::new()),
-            next_id: AtomicU64::new(0),
         })
     }
 
@@ -74,18 +71,23 @@ impl Jobs {
         files::jobs_dir(&self.data_dir).join(id)
     }
 
-    /// A new job id: time and a process counter (unique across restarts of one data dir, as
-    /// the clock moves on), checked against the store.
-    pub fn new_id(&self) -> String {
+    /// A new job id: the clock (so ids read in order of creation) and 64 random bits, 32 hex
+    /// digits. The id is all one needs to read a job and its files, so it must not be guessed
+    /// from another id or from the time: the random half makes that a 1 in 2^64 chance per try.
+    /// Checked against the store and the job folders.
+    pub fn new_id(&self) -> Result<String, ApiError> {
         loop {
             let nanos = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map(|d| d.as_nanos() as u64)
                 .unwrap_or(0);
-            let n = self.next_id.fetch_add(1, Ordering::Relaxed);
-            let id = format!("{nanos:016x}{:04x}", n & 0xffff);
+            let mut random = [0u8; 8];
+            getrandom::fill(&mut random).map_err(|e| {
+                ApiError::internal(format!("the system's random source failed: {e}"))
+            })?;
+            let id = format!("{nanos:016x}{:016x}", u64::from_le_bytes(random));
             if !self.job_dir(&id).exists() && !matches!(self.store.get(&id), Ok(Some(_))) {
-                return id;
+                return Ok(id);
             }
         }
     }
@@ -157,11 +159,12 @@ impl Jobs {
         }
     }
 
-    /// The library: the newest `limit` jobs' objects, newest first.
-    pub fn library(&self, limit: usize) -> Result<Vec<JobView>, ApiError> {
+    /// The library: the newest `limit` jobs' objects, newest first; every job's for `None`
+    /// (the administrator), the owner key's otherwise.
+    pub fn library(&self, limit: usize, owner: Option<&str>) -> Result<Vec<JobView>, ApiError> {
         Ok(self
             .store
-            .newest(limit)?
+            .newest(limit, owner)?
             .iter()
             .map(|row| self.view_of(row))
             .collect())

@@ -15,6 +15,7 @@
 pub mod api;
 pub mod catalog;
 pub mod client;
+pub mod client_limits;
 pub mod config;
 pub mod download_all;
 pub mod download_names;
@@ -22,9 +23,11 @@ pub mod edit_job;
 pub mod edit_params;
 pub mod error;
 pub mod files;
+pub mod headers;
 pub mod job;
 pub mod jobs;
 pub mod library;
+pub mod owner;
 pub mod store;
 pub mod thumbnail;
 pub mod timeline;
@@ -78,6 +81,11 @@ fn start_app(config: &ServeConfig) -> Result<(AppState, Workers), String> {
         limits: config.limits.clone(),
         catalog,
         submit_lock: Arc::new(Mutex::new(())),
+        admin: config.admin.clone(),
+        clients: client_limits::ClientLimits::new(
+            config.limits.jobs_per_minute,
+            config.limits.streams_per_client,
+        ),
     };
     Ok((state, workers))
 }
@@ -152,7 +160,9 @@ async fn serve_until(
 ) -> Result<(), String> {
     let stopping = Arc::new(tokio::sync::Notify::new());
     let told = stopping.clone();
-    let server = axum::serve(listener, router).with_graceful_shutdown(async move {
+    // The peer's address feeds the per-client limits (`client_limits`).
+    let app = router.into_make_service_with_connect_info::<std::net::SocketAddr>();
+    let server = axum::serve(listener, app).with_graceful_shutdown(async move {
         stop.await;
         told.notify_one();
     });

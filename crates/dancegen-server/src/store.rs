@@ -34,6 +34,9 @@ pub struct JobRow {
     pub warnings: Vec<String>,
     /// The name the user gave the dance in the library (`None`: the song's).
     pub name: Option<String>,
+    /// SHA-256 of the owner secret the job was made with ([`crate::owner`]); `None` for jobs
+    /// the administrator made and jobs from before owners.
+    pub owner: Option<String>,
 }
 
 pub struct Store {
@@ -69,11 +72,14 @@ CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);
 ";
 
 const COLUMNS: &str = "id, state, stage, progress, eta_s, error, params, song, leader, created, \
-     finished, attempts, warnings, name";
+     finished, attempts, warnings, name, owner";
 
 /// Columns added after the first release, with their types: a database an older server made
 /// gets them when it is opened (`ALTER TABLE ... ADD COLUMN`; old rows read them as NULL).
-const ADDED_COLUMNS: [(&str, &str); 2] = [("warnings", "TEXT"), ("name", "TEXT")];
+/// `owner` is the owner key ([`crate::owner`]); jobs an older server made have none, and only
+/// the administrator may change or list them.
+const ADDED_COLUMNS: [(&str, &str); 3] =
+    [("warnings", "TEXT"), ("name", "TEXT"), ("owner", "TEXT")];
 
 fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
     let state: String = r.get(1)?;
@@ -99,6 +105,7 @@ fn row_of(r: &rusqlite::Row<'_>) -> rusqlite::Result<JobRow> {
             Some(text) => serde_json::from_str(&text).map_err(|e| bad(format!("warnings: {e}")))?,
         },
         name: r.get(13)?,
+        owner: r.get(14)?,
     })
 }
 
@@ -144,19 +151,20 @@ impl Store {
         self.conn.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Adds a queued job (its files are already in place).
+    /// Adds a queued job (its files are already in place), owned by the owner key `owner`.
     pub fn insert(
         &self,
         id: &str,
         params: &JobParams,
         song: &str,
         leader: Option<&str>,
+        owner: Option<&str>,
     ) -> rusqlite::Result<()> {
         let params = serde_json::to_string(params).expect("params serialise");
         self.conn().execute(
-            "INSERT INTO jobs (id, state, params, song, leader, created)
-             VALUES (?1, 'queued', ?2, ?3, ?4, ?5)",
-            params![id, params, song, leader, now()],
+            "INSERT INTO jobs (id, state, params, song, leader, created, owner)
+             VALUES (?1, 'queued', ?2, ?3, ?4, ?5, ?6)",
+            params![id, params, song, leader, now(), owner],
         )?;
         Ok(())
     }
@@ -276,13 +284,24 @@ impl Store {
             == 1)
     }
 
-    /// The newest `limit` jobs, newest first (the library).
-    pub fn newest(&self, limit: usize) -> rusqlite::Result<Vec<JobRow>> {
+    /// The newest `limit` jobs, newest first (the library): every job for `None` (the
+    /// administrator), those of the owner key `Some(key)` otherwise.
+    pub fn newest(&self, limit: usize, owner: Option<&str>) -> rusqlite::Result<Vec<JobRow>> {
         let conn = self.conn();
-        let mut st = conn.prepare(&format!(
-            "SELECT {COLUMNS} FROM jobs ORDER BY seq DESC LIMIT ?1"
-        ))?;
-        st.query_map([limit as i64], row_of)?.collect()
+        match owner {
+            None => {
+                let mut st = conn.prepare(&format!(
+                    "SELECT {COLUMNS} FROM jobs ORDER BY seq DESC LIMIT ?1"
+                ))?;
+                st.query_map([limit as i64], row_of)?.collect()
+            }
+            Some(key) => {
+                let mut st = conn.prepare(&format!(
+                    "SELECT {COLUMNS} FROM jobs WHERE owner = ?2 ORDER BY seq DESC LIMIT ?1"
+                ))?;
+                st.query_map(params![limit as i64, key], row_of)?.collect()
+            }
+        }
     }
 
     /// Gives job `id` the library name `name` (`None` clears it); `true` when there is a job.
@@ -332,8 +351,8 @@ mod tests {
         {
             let (s, requeued) = Store::open(&db).unwrap();
             assert!(requeued.is_empty());
-            s.insert("a", &params(), "song.ogg", None).unwrap();
-            s.insert("b", &params(), "song.ogg", None).unwrap();
+            s.insert("a", &params(), "song.ogg", None, None).unwrap();
+            s.insert("b", &params(), "song.ogg", None, None).unwrap();
             assert_eq!(s.active_count().unwrap(), 2);
             assert_eq!(s.claim().unwrap().unwrap().id, "a");
             assert_eq!(s.queue_position("b").unwrap(), Some(0));
@@ -360,7 +379,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (s, _) = Store::open(&dir.path().join("jobs.sqlite3")).unwrap();
         for id in ["q", "r", "d", "f"] {
-            s.insert(id, &params(), "song.ogg", None).unwrap();
+            s.insert(id, &params(), "song.ogg", None, None).unwrap();
         }
         for (id, state) in [("q", None), ("r", None), ("d", Some(JobState::Done))] {
             let claimed = s.claim().unwrap().unwrap();
@@ -380,8 +399,9 @@ mod tests {
         assert_eq!(s.finished_before(later).unwrap(), ["d", "f"], "by creation");
     }
 
-    /// A database an older server made (no `warnings` column) opens, its jobs read with no
-    /// warnings, and a job finished now keeps its warnings across a reopen.
+    /// A database an older server made (no `warnings` or `owner` column) opens, its jobs read
+    /// with no warnings and no owner, the library filters by owner, and a job finished now
+    /// keeps its warnings across a reopen.
     #[test]
     fn an_older_database_gets_the_warnings_column() {
         let dir = tempfile::tempdir().unwrap();
@@ -398,7 +418,22 @@ mod tests {
         }
         let (s, _) = Store::open(&db).unwrap();
         assert!(s.get("old").unwrap().unwrap().warnings.is_empty());
-        s.insert("new", &params(), "song.ogg", None).unwrap();
+        // A job from before owners has none: only the administrator lists it.
+        assert_eq!(s.get("old").unwrap().unwrap().owner, None);
+        s.insert("new", &params(), "song.ogg", None, Some("key-a"))
+            .unwrap();
+        s.insert("other", &params(), "song.ogg", None, Some("key-b"))
+            .unwrap();
+        let listed = |owner| -> Vec<String> {
+            s.newest(10, owner)
+                .unwrap()
+                .into_iter()
+                .map(|r| r.id)
+                .collect()
+        };
+        assert_eq!(listed(Some("key-a")), ["new"]);
+        assert_eq!(listed(None), ["other", "new", "old"]);
+        assert!(listed(Some("nobody")).is_empty());
         s.claim().unwrap();
         let said = vec!["no beat was found".to_string()];
         s.finish("new", JobState::Done, None, &said).unwrap();

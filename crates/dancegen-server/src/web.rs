@@ -46,6 +46,13 @@ pub async fn asset(uri: Uri) -> Response {
     }
 }
 
+/// The page's inline import map (the text the Content-Security-Policy allows by its hash).
+pub fn import_map() -> Option<String> {
+    let page = Web::get("index.html")?;
+    let html = std::str::from_utf8(&page.data).ok()?;
+    crate::headers::import_map_of(html).map(str::to_string)
+}
+
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -25,6 +25,7 @@
 import { Viewer, downloadLinks } from './viewer.js';
 import { EditPanel, fetchVersions, renderVersions } from './edit.js';
 import { Library, STATE_WORDS, againHref, danceTitle } from './library.js';
+import { owned, rememberOwner } from './owner.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -476,14 +477,16 @@ async function submit() {
   button.disabled = true;
   button.textContent = 'Uploading…';
   try {
-    const res = await fetch('api/jobs', { method: 'POST', body });
+    const res = await fetch('api/jobs', owned({ method: 'POST', body }));
     if (!res.ok) {
       const err = await responseError(res, 'The upload was refused');
       showNotice(err.message);
       markField(err.field);
       return;
     }
-    const { id } = await res.json();
+    const reply = await res.json();
+    rememberOwner(reply);
+    const { id } = reply;
     history.pushState(null, '', `?job=${encodeURIComponent(id)}`);
     route();
   } catch (e) {
@@ -598,7 +601,7 @@ async function cancelJob(id) {
   const cancel = $('cancel');
   cancel.disabled = true;
   try {
-    const res = await fetch(`api/jobs/${encodeURIComponent(id)}`, { method: 'DELETE' });
+    const res = await fetch(`api/jobs/${encodeURIComponent(id)}`, owned({ method: 'DELETE' }));
     if (!res.ok) showNotice((await responseError(res, 'Cancelling')).message);
     else $('job-status').textContent = 'Cancelling…';
   } catch (e) {

@@ -15,6 +15,7 @@
  * takes them.
  */
 import { formatTime } from './viewer.js';
+import { owned, rememberOwner } from './owner.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -187,8 +188,9 @@ export class EditPanel {
     button.disabled = true;
     button.textContent = 'Sending…';
     try {
-      const res = await fetch('api/jobs', { method: 'POST', body });
+      const res = await fetch('api/jobs', owned({ method: 'POST', body }));
       const reply = await res.json().catch(() => ({}));
+      rememberOwner(reply);
       if (!res.ok) {
         this.page.notice(`The new version was refused: ${reply.error ?? `HTTP ${res.status}`}`);
         return;

@@ -1,9 +1,12 @@
 /**
- * "My dances": the jobs this server holds, newest first, under the form. Each shows its
+ * "My dances": the dances this browser made (its owner secret, `owner.js`), newest first,
+ * under the form. Each shows its
  * picture, its name (or its song's), system, seed, state and date, with Open, Rename, Delete
  * (after a confirmation) and, for a finished dance, "Again with another seed" — or "Try
  * again" for one that failed or was cancelled, with the same settings and song.
  */
+
+import { owned, rememberOwner } from './owner.js';
 
 const SYSTEM_WORDS = { solo: 'Solo', duet: 'Duet', group: 'Group', holistic: 'Body, hands and face' };
 export const STATE_WORDS = { queued: 'waiting', running: 'being made', done: 'done', failed: 'failed', cancelled: 'cancelled' };
@@ -44,7 +47,7 @@ export class Library {
   async refresh() {
     let jobs;
     try {
-      const res = await fetch('api/jobs');
+      const res = await fetch('api/jobs', owned());
       if (!res.ok) throw new Error(await failure(res, 'Listing your dances'));
       jobs = (await res.json()).jobs ?? [];
     } catch (e) {
@@ -115,34 +118,35 @@ export class Library {
   async rename(job) {
     const name = window.prompt('Name this dance (empty: the song\'s name):', job.name ?? '');
     if (name === null) return;
-    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}`, {
+    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}`, owned({
       method: 'PATCH',
       headers: { 'Content-Type': 'application/json' },
       body: JSON.stringify({ name }),
-    });
+    }));
     if (!res.ok) this.notify(await failure(res, 'Renaming'));
     await this.refresh();
   }
 
   async remove(job) {
     if (!window.confirm(`Delete "${danceTitle(job)}" and all its files? This cannot be undone.`)) return;
-    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}`, { method: 'DELETE' });
+    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}`, owned({ method: 'DELETE' }));
     if (!res.ok) this.notify(await failure(res, 'Deleting'));
     await this.refresh();
   }
 
   /** A new job from this one (its song and settings; `seed` when given); opens it. */
   async again(job, seed) {
-    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}/again`, {
+    const res = await fetch(`api/jobs/${encodeURIComponent(job.id)}/again`, owned({
       method: 'POST',
       headers: { 'Content-Type': 'application/json' },
       body: JSON.stringify(seed === undefined ? {} : { seed }),
-    });
+    }));
     if (!res.ok) {
       this.notify(await failure(res, 'Making it again'));
       return;
     }
-    const { id } = await res.json();
-    location.href = `?job=${encodeURIComponent(id)}`;
+    const reply = await res.json();
+    rememberOwner(reply);
+    location.href = `?job=${encodeURIComponent(reply.id)}`;
   }
 }

@@ -23,3 +23,19 @@ export function collectErrors(page, errors, ignore = () => false) {
     if (m.type() === 'error' && !ignore(m.text())) errors.push(`console: ${m.text()}`);
   });
 }
+
+/**
+ * A new page acting as the browser that made the test's jobs: the owner secret the Rust test's
+ * client holds (`DANCEGEN_OWNER_SECRET`) is put in local storage, where the page keeps it.
+ * Without the variable, a plain new page.
+ */
+export async function ownedPage(browser) {
+  const page = await browser.newPage();
+  const secret = process.env.DANCEGEN_OWNER_SECRET;
+  if (secret) {
+    await page.evaluateOnNewDocument((s) => {
+      window.localStorage.setItem('dancegen-owner-secret', s);
+    }, secret);
+  }
+  return page;
+}

@@ -29,7 +29,7 @@
  */
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { collectErrors, launchChromium } from './chromium.mjs';
+import { collectErrors, launchChromium, ownedPage } from './chromium.mjs';
 
 // Generous: every check waits for a chooser that should open, and with the other server tests
 // generating dances on both cores, 3 s was once too short for the first one.
@@ -61,7 +61,7 @@ try {
     return waiting;
   };
 
-  const desk = await browser.newPage();
+  const desk = await ownedPage(browser);
   await desk.setViewport({ width: 1280, height: 900 });
   await open(desk);
   // waitForFileChooser turns interception on without waiting for the browser's answer, so the
@@ -87,7 +87,7 @@ try {
   result.desktop.notice = await desk.$eval('#notice', (e) => (e.hidden ? null : e.textContent));
   result.desktop.invalid = await desk.evaluate(() => document.querySelector('[aria-invalid="true"]')?.id ?? null);
 
-  const phone = await browser.newPage();
+  const phone = await ownedPage(browser);
   await phone.emulate({
     viewport: { width: 375, height: 667, deviceScaleFactor: 2, isMobile: true, hasTouch: true },
     userAgent: 'Mozilla/5.0 (Linux; Android 14) AppleWebKit/537.36 (KHTML, like Gecko) Chrome/130.0 Mobile Safari/537.36',
@@ -113,7 +113,7 @@ try {
   // The character flow: the field offered for one dancer only; a file that is not a .glb or
   // .vrm refused in the page, naming the field; the character sent with a song makes a job
   // whose params name it.
-  const page = await browser.newPage();
+  const page = await ownedPage(browser);
   await page.setViewport({ width: 1280, height: 900 });
   await open(page);
   const shownFor = {};
@@ -147,7 +147,7 @@ try {
 
   // "Try again" on a cancelled job: its page links to the form filled in from it, and the
   // form holds its settings and its files.
-  const retry = await browser.newPage();
+  const retry = await ownedPage(browser);
   await retry.setViewport({ width: 1280, height: 900 });
   collectErrors(retry, errors);
   await retry.goto(`${base}/?job=${encodeURIComponent(cancelledJob)}`, { waitUntil: 'networkidle0' });

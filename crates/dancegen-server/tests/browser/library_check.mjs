@@ -3,8 +3,12 @@
  * Drives "My dances" of the web app in headless Chromium and reports what happened, for the
  * server's Rust test to check:
  *
- *   node library_check.mjs <base_url> <out_dir>
+ *   node library_check.mjs <base_url> <out_dir> [stranger]
  *
+ * The page acts as the browser that made the dances (`ownedPage`: the owner secret in
+ * `DANCEGEN_OWNER_SECRET`), so its library lists them. With `stranger` it has no secret: the
+ * page is opened, its library request answered, the items (none expected) read and printed,
+ * and nothing else is done.
  * Opens <base_url>/, waits for the library's items and reads them (job id, title, the line
  * under it, the buttons, whether the picture loaded), screenshots the page
  * (<out_dir>/library.png, and at phone size library_phone.png), renames the first dance
@@ -21,11 +25,11 @@
  */
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
-import { collectErrors, launchChromium } from './chromium.mjs';
+import { collectErrors, launchChromium, ownedPage } from './chromium.mjs';
 
 const STEP_TIMEOUT_MS = 30_000;
 
-const [baseArg, outDir] = process.argv.slice(2);
+const [baseArg, outDir, mode] = process.argv.slice(2);
 if (!baseArg || !outDir) {
   console.error('usage: node library_check.mjs <base_url> <out_dir>');
   process.exit(2);
@@ -41,7 +45,7 @@ const browser = await launchChromium();
 
 let exitCode = 0;
 try {
-  const page = await browser.newPage();
+  const page = mode === 'stranger' ? await browser.newPage() : await ownedPage(browser);
   await page.setViewport({ width: 1100, height: 900 });
   page.on('request', (r) => requests.push(r.url()));
   // The deleted dance's page asks for it and is answered 404, as it should be: from then on
@@ -64,6 +68,12 @@ try {
   const result = { requests, errors, dialogs };
   try {
     await page.goto(`${base}/`, { waitUntil: 'networkidle0', timeout: STEP_TIMEOUT_MS });
+    if (mode === 'stranger') {
+      result.items = await items();
+      console.log(JSON.stringify(result));
+      await browser.close();
+      process.exit(0);
+    }
     await page.waitForSelector('#library-list li', { timeout: STEP_TIMEOUT_MS });
     await page.waitForFunction(() => [...document.querySelectorAll('#library-list img')].every((i) => i.complete), { timeout: STEP_TIMEOUT_MS });
     result.items = await items();

@@ -31,6 +31,7 @@
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
 import puppeteer from 'puppeteer-core';
+import { ownedPage } from './chromium.mjs';
 
 const CHROMIUM = process.env.CHROMIUM ?? '/usr/bin/chromium';
 const READY_TIMEOUT_MS = 60_000;
@@ -71,7 +72,7 @@ const browser = await puppeteer.launch({
 
 let exitCode = 0;
 try {
-  const page = await browser.newPage();
+  const page = await ownedPage(browser);
   await page.setViewport({ width: 1280, height: 800 });
   page.on('request', (r) => requests.push(r.url()));
   page.on('pageerror', (e) => errors.push(`pageerror: ${e?.message ?? e}`));

@@ -161,9 +161,15 @@ fn downloads_are_named_after_the_song_and_come_as_one_zip() {
         expected.keys().collect::<Vec<_>>()
     );
     assert!(got == expected, "the zip's files differ from the downloads");
-    // The song itself is not a dance file: it has no download name and is not zipped.
-    let r = s.get(job["song"].as_str().unwrap());
-    assert_eq!(r.header("content-disposition"), None);
+    // The song itself is not a dance file: it is not zipped, and downloads under its own
+    // name (every job file is an attachment).
+    let song = job["song"].as_str().unwrap();
+    let r = s.get(song);
+    let stored = song.rsplit('/').next().unwrap();
+    assert_eq!(
+        r.header("content-disposition"),
+        Some(format!("attachment; filename=\"{stored}\"; filename*=UTF-8''{stored}").as_str())
+    );
     assert_eq!(s.get("/api/jobs/nosuchjob/zip").status, 404);
 }
 
@@ -825,7 +831,7 @@ fn finished_jobs_older_than_the_keep_time_are_removed_at_start() {
         let (store, _) = Store::open(&db).unwrap();
         let params = JobParams::parse(r#"{"system": "solo"}"#, 4).unwrap();
         for (id, state, _) in &jobs {
-            store.insert(id, &params, "song.ogg", None).unwrap();
+            store.insert(id, &params, "song.ogg", None, None).unwrap();
             store.claim().unwrap().unwrap();
             store.finish(id, *state, None, &[]).unwrap();
             let dir = data.path().join("jobs").join(id);

@@ -68,12 +68,23 @@ fn trimmed_bvh(path: &Path, seconds: f64) -> Vec<u8> {
     out.into_bytes()
 }
 
+/// `node`, with the owner secret of the jobs the test's client made in
+/// `DANCEGEN_OWNER_SECRET`: the page then acts as the browser that made them
+/// (`chromium.mjs`'s `ownedPage`).
+fn node_as_owner(s: &TestServer) -> Command {
+    let mut node = Command::new("node");
+    if let Some(secret) = s.client.token() {
+        node.env("DANCEGEN_OWNER_SECRET", secret);
+    }
+    node
+}
+
 /// Runs the browser driver on job `id`; its JSON report.
 fn view(s: &TestServer, id: &str, name: &str) -> Value {
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("viewer-shots")
         .join(name);
-    let out = Command::new("node")
+    let out = node_as_owner(s)
         .arg(browser_dir().join("viewer_check.mjs"))
         .arg(s.server.url())
         .arg(id)
@@ -473,7 +484,7 @@ fn a_part_marked_on_the_timeline_is_regenerated_as_a_new_version_and_compared() 
     assert_eq!(job["state"], "done", "{job}");
 
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("edit-shots");
-    let out = Command::new("node")
+    let out = node_as_owner(&s)
         .arg(browser_dir().join("edit_check.mjs"))
         .arg(s.server.url())
         .arg(&id)
@@ -622,7 +633,7 @@ fn the_song_form_works_from_the_keyboard_and_on_a_phone() {
     let job = s.wait(&cancelled, JOB_TIMEOUT);
     assert_eq!(job["state"], "cancelled", "{job}");
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("form-shots");
-    let out = Command::new("node")
+    let out = node_as_owner(&s)
         .arg(browser_dir().join("form_check.mjs"))
         .arg(s.server.url())
         .arg(&shots)
@@ -739,7 +750,24 @@ fn my_dances_lists_renames_and_deletes_dances() {
         ids.push(id);
     }
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("library-shots");
-    let out = Command::new("node")
+    // A browser without the jobs' owner secret lists none of them.
+    let stranger = Command::new("node") // no secret
+        .arg(browser_dir().join("library_check.mjs"))
+        .arg(s.server.url())
+        .arg(shots.join("stranger"))
+        .arg("stranger")
+        .output()
+        .expect("this test needs node (Node.js) on the PATH");
+    assert!(
+        stranger.status.success(),
+        "library_check (stranger) failed:\n{}",
+        String::from_utf8_lossy(&stranger.stderr)
+    );
+    let seen: Value = serde_json::from_slice(&stranger.stdout).unwrap();
+    assert_eq!(seen["items"], serde_json::json!([]), "{seen}");
+    assert_eq!(seen["errors"], serde_json::json!([]), "{seen}");
+    // The browser that made them (the client's secret in its storage) lists them.
+    let out = node_as_owner(&s)
         .arg(browser_dir().join("library_check.mjs"))
         .arg(s.server.url())
         .arg(&shots)

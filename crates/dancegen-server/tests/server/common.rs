@@ -24,10 +24,15 @@ pub struct TestServer {
 }
 
 pub fn start(limits: Limits) -> TestServer {
+    start_with(|config| config.limits = limits)
+}
+
+/// A server with the settings `set` makes (on a free loopback port, a temporary data dir).
+pub fn start_with(set: impl FnOnce(&mut ServeConfig)) -> TestServer {
     let data = tempfile::tempdir().unwrap();
     let mut config = ServeConfig::new(data.path());
     config.addr = "127.0.0.1:0".parse().unwrap();
-    config.limits = limits;
+    set(&mut config);
     let server = dancegen_server::spawn(config).expect("server starts");
     let client = Client::new(server.url());
     TestServer {

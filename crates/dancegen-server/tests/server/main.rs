@@ -4,3 +4,5 @@
 mod api;
 mod browser;
 mod common;
+mod limits;
+mod ownership;
