@@ -75,6 +75,15 @@ if [ "${free_gb:-0}" -lt 20 ]; then
 fi
 # Installed above, so the Blender test must run (without this it skips where Blender is absent).
 export DANCEGEN_REQUIRE_BLENDER=1
+# The full-disk tests mount a small tmpfs (root only). Where this machine can, they must run.
+probe=$(mktemp -d)
+if mount -t tmpfs -o size=1m tmpfs "$probe" 2>/dev/null; then
+  umount "$probe"
+  export DANCEGEN_REQUIRE_TMPFS=1
+else
+  echo "tools/test.sh: cannot mount a tmpfs here; the full-disk tests will be skipped" >&2
+fi
+rmdir "$probe"
 status=0
 cargo test --workspace --locked "$@" || status=$?
 

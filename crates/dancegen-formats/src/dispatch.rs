@@ -35,10 +35,16 @@ pub struct FormatError {
     pub reason: String,
 }
 
+/// The error about `path`; a reason that already starts with the path (a write error from
+/// `dancegen-io` names its file) is not prefixed twice.
 fn err(path: &Path, reason: impl std::fmt::Display) -> FormatError {
+    let reason = reason.to_string();
+    let named = format!("{}: ", path.display());
     FormatError {
         path: path.to_path_buf(),
-        reason: reason.to_string(),
+        reason: reason
+            .strip_prefix(&named)
+            .map_or(reason.clone(), str::to_string),
     }
 }
 

@@ -242,6 +242,27 @@ impl Jobs {
         }
     }
 
+    /// Shows listeners and status requests that job `id` ended (`state`, `error`) before the
+    /// store has it (the store could not be written; [`crate::worker`] retries).
+    pub fn show_end(&self, id: &str, state: JobState, error: Option<&str>) {
+        let Ok(Some(row)) = self.store.get(id) else {
+            return;
+        };
+        let mut view = self.view_of(&row);
+        view.state = state;
+        view.error = error.map(str::to_string);
+        view.eta_s = None;
+        let mut live = lock(&self.live);
+        match live.get(id) {
+            Some(tx) => {
+                tx.send_replace(view);
+            }
+            None => {
+                live.insert(id.to_string(), watch::channel(view).0);
+            }
+        }
+    }
+
     /// Re-publishes every queued job (their places in the queue moved up).
     pub fn publish_queue(&self) {
         match self.store.ids_in(JobState::Queued) {

@@ -144,10 +144,43 @@ fn run_job(
     {
         tracing::warn!("job {id}: no picture for the library: {e}");
     }
-    if let Err(e) = jobs.store.finish(id, state, error.as_deref(), &warnings) {
-        tracing::error!("job {id}: recording its end: {e}");
-    }
+    record_end(jobs, stop, id, state, error.as_deref(), &warnings);
     jobs.publish(id);
+}
+
+/// How often the end of a job is written again while the database cannot take it.
+const RECORD_RETRY: Duration = Duration::from_secs(2);
+
+/// Writes the job's end to the store. When that fails (a full disk: SQLite cannot grow its
+/// log), the end is shown from memory at once, so clients see the job finish, and written
+/// again every [`RECORD_RETRY`] until it is stored: this worker takes no other job meanwhile
+/// (none could write its files either). On shutdown it gives up; the job, still `running` in
+/// the store, runs again on the next start.
+fn record_end(
+    jobs: &Jobs,
+    stop: &AtomicBool,
+    id: &str,
+    state: JobState,
+    error: Option<&str>,
+    warnings: &[String],
+) {
+    let mut said = false;
+    while let Err(e) = jobs.store.finish(id, state, error, warnings) {
+        if !said {
+            tracing::error!(
+                "job {id}: recording its end: {e}; trying again every {RECORD_RETRY:?}"
+            );
+            jobs.show_end(id, state, error);
+            said = true;
+        }
+        if stop.load(Ordering::SeqCst) {
+            return;
+        }
+        std::thread::sleep(RECORD_RETRY);
+    }
+    if said {
+        tracing::info!("job {id}: its end is recorded");
+    }
 }
 
 /// Every variation of the job, in order; progress is spread evenly over them.
