@@ -82,7 +82,10 @@ fn only_the_owner_or_the_administrator_changes_a_job() {
 
     // Each lists their own; a stranger lists nothing; the administrator lists all.
     assert_eq!(ids(&s.get("/api/jobs").json), [a2.clone(), a.clone()]);
-    assert_eq!(ids(&bob.get("/api/jobs").unwrap().json), std::slice::from_ref(&b));
+    assert_eq!(
+        ids(&bob.get("/api/jobs").unwrap().json),
+        std::slice::from_ref(&b)
+    );
     assert!(ids(&stranger.get("/api/jobs").unwrap().json).is_empty());
     let admin = Client::with_token(&url, ADMIN);
     assert_eq!(
