@@ -1,6 +1,7 @@
 //! The body check of every motion file read ([`dancegen_motion::body_bounds`]), on the world
 //! joint positions of whatever the file holds: SMPL rotations through forward kinematics, a
-//! BVH through its own hierarchy, joint arrays as they are.
+//! BVH through its own hierarchy, joint arrays as they are. The motion reader calls these for
+//! each kind of motion it read.
 
 use dancegen_motion::body_bounds::{BodyUnits, check_body};
 use dancegen_motion::skeleton::{
@@ -9,46 +10,13 @@ use dancegen_motion::skeleton::{
 
 use crate::bvh::Bvh;
 use crate::bvh_motion::{bvh_world_positions, bvh_world_transforms};
-use crate::dispatch::LoadedMotion;
 
 /// A standing person's height, metres: a BVH stores no unit, so its rest pose's tallest extent
 /// is taken as this many metres to put the bounds in the file's units.
 pub const REST_POSE_HEIGHT_M: f64 = 1.7;
 
-/// Checks `m` as read; `Err` says which dancer (of a group), frame and joint, and why.
-pub fn check_loaded(m: &LoadedMotion) -> Result<(), String> {
-    match m {
-        LoadedMotion::Smpl(s) => smpl_joints(&s.joints_world().map_err(|e| e.to_string())?),
-        LoadedMotion::Group(dancers) => {
-            for (d, s) in dancers.iter().enumerate() {
-                let joints = s.joints_world().map_err(|e| e.to_string())?;
-                smpl_joints(&joints).map_err(|e| format!("dancer {d}, {e}"))?;
-            }
-            Ok(())
-        }
-        LoadedMotion::Bvh(b) => bvh(b),
-        LoadedMotion::Joints {
-            dancers,
-            joints,
-            positions,
-            ..
-        } => {
-            let per_dancer = positions.len() / (*dancers).max(1);
-            for (d, p) in positions.chunks(per_dancer.max(1)).enumerate() {
-                joint_array(p, *joints).map_err(|e| {
-                    if *dancers > 1 {
-                        format!("dancer {d}, {e}")
-                    } else {
-                        e
-                    }
-                })?;
-            }
-            Ok(())
-        }
-    }
-}
-
-fn smpl_joints(positions: &[f32]) -> Result<(), String> {
+/// SMPL 24 world joints `(T, 24, 3)`, metres.
+pub fn smpl_joints(positions: &[f32]) -> Result<(), String> {
     check_body(
         positions,
         24,
@@ -74,7 +42,8 @@ pub fn joint_array<T: Copy + Into<f64>>(positions: &[T], joints: usize) -> Resul
     check_body(positions, joints, parents, names, BodyUnits::METRES).map_err(|e| e.to_string())
 }
 
-fn bvh(b: &Bvh) -> Result<(), String> {
+/// A BVH's world joints, in its own units (scaled by its rest pose).
+pub fn bvh(b: &Bvh) -> Result<(), String> {
     let (_, joints, positions) = bvh_world_positions(b, 1.0).map_err(|e| e.to_string())?;
     let parents: Vec<i32> = b
         .joints

@@ -15,6 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::aistpp;
+use crate::body_check;
 use crate::bvh::{self, Bvh, BvhReadOptions, BvhWriteOptions};
 use crate::bvh_motion::{self, bvh_world_positions};
 use crate::fbx::{self, FbxOptions};
@@ -218,8 +219,44 @@ pub fn load_motion_file_with(path: &Path, opts: &LoadOptions) -> Result<LoadedMo
             LoadedMotion::Bvh(_) => {}
         }
     }
-    crate::body_check::check_loaded(&loaded).map_err(|e| err(path, e))?;
+    check_loaded(&loaded).map_err(|e| err(path, e))?;
     Ok(loaded)
+}
+
+/// The body check ([`body_check`]) of `m` as read; `Err` says which dancer (of a group),
+/// frame and joint, and why.
+fn check_loaded(m: &LoadedMotion) -> Result<(), String> {
+    match m {
+        LoadedMotion::Smpl(s) => {
+            body_check::smpl_joints(&s.joints_world().map_err(|e| e.to_string())?)
+        }
+        LoadedMotion::Group(dancers) => {
+            for (d, s) in dancers.iter().enumerate() {
+                let joints = s.joints_world().map_err(|e| e.to_string())?;
+                body_check::smpl_joints(&joints).map_err(|e| format!("dancer {d}, {e}"))?;
+            }
+            Ok(())
+        }
+        LoadedMotion::Bvh(b) => body_check::bvh(b),
+        LoadedMotion::Joints {
+            dancers,
+            joints,
+            positions,
+            ..
+        } => {
+            let per_dancer = positions.len() / (*dancers).max(1);
+            for (d, p) in positions.chunks(per_dancer.max(1)).enumerate() {
+                body_check::joint_array(p, *joints).map_err(|e| {
+                    if *dancers > 1 {
+                        format!("dancer {d}, {e}")
+                    } else {
+                        e
+                    }
+                })?;
+            }
+            Ok(())
+        }
+    }
 }
 
 fn load_pickle(path: &Path) -> Result<LoadedMotion, FormatError> {
