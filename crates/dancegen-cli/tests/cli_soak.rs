@@ -283,6 +283,15 @@ fn twenty_clients_for_a_while_lose_nothing_and_leak_nothing() {
         .map(|s| s.1)
         .max()
         .unwrap_or(0);
+    // The largest RSS of each minute, to tell a plateau from a leak.
+    let mut by_minute: Vec<u64> = Vec::new();
+    for (t, rss) in &samples {
+        let m = (*t / 60.0) as usize;
+        if by_minute.len() <= m {
+            by_minute.resize(m + 1, 0);
+        }
+        by_minute[m] = by_minute[m].max(*rss >> 20);
+    }
     let report = serde_json::json!({
         "seconds": seconds,
         "clients": CLIENTS,
@@ -294,6 +303,7 @@ fn twenty_clients_for_a_while_lose_nothing_and_leak_nothing() {
         "peak_rss_mb": peak >> 20,
         "peak_rss_first_part_mb": peak_warm >> 20,
         "peak_rss_after_mb": peak_late >> 20,
+        "rss_mb_by_minute": by_minute,
         "fds_start": fds_at_start,
         "fds_end": fds_at_end,
         "jobs": states,

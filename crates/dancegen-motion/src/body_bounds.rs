@@ -16,8 +16,10 @@ pub const MAX_JOINT_DISTANCE_M: f64 = 10_000.0;
 /// A body's bones keep their length, and motion computed from rotations (SMPL, BVH without
 /// joint translations) keeps it exactly. Joint positions predicted directly are noisier: the
 /// reference metric fixtures' noisy generated clips change a bone by up to 0.29 m
-/// (`shared/fixtures/metrics/inputs/generated/gen04_R3_noise_*`), and must still be scored.
-/// A change of more than a metre (about half a body height) is no longer one body.
+/// (`shared/fixtures/metrics/inputs/generated/gen04_R3_noise_*`), and must still be scored;
+/// AIST++'s keypoints triangulated from video change one by up to 0.28 m
+/// (`python3 tools/bone_stretch.py`). A change of more than a metre (about half a body
+/// height) is no longer one body.
 pub const MAX_BONE_STRETCH_M: f64 = 1.0;
 
 /// A motion refused by [`check_body`]: where, and why.
