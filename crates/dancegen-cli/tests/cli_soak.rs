@@ -322,6 +322,8 @@ fn twenty_clients_for_a_while_lose_nothing_and_leak_nothing() {
             peak_late >> 20
         );
     }
+    // Measured 15 → 15 in the 60 s and both 30 min runs; the slack is for files the server may
+    // open once and keep (SQLite's -wal and -shm appear on its first write).
     assert!(
         fds_at_end <= fds_at_start + 8,
         "open file descriptors {fds_at_start} → {fds_at_end}"

@@ -27,7 +27,7 @@ pub fn check_wave_head(head: &[u8]) -> Result<(), String> {
         return Ok(());
     }
     let mut pos = 12usize;
-    while let Some(header) = head.get(pos..pos + 8) {
+    while let Some(header) = pos.checked_add(8).and_then(|end| head.get(pos..end)) {
         let size = u32::from_le_bytes([header[4], header[5], header[6], header[7]]) as usize;
         let body = pos + 8;
         if &header[..4] == b"fmt " {

@@ -38,7 +38,10 @@ pub async fn asset(uri: Uri) -> Response {
             .header(header::CACHE_CONTROL, "no-cache")
             .header(
                 header::ETAG,
-                format!("\"{}\"", hex(&file.metadata.sha256_hash()[..8])),
+                format!(
+                    "\"{}\"",
+                    crate::owner::hex(&file.metadata.sha256_hash()[..8])
+                ),
             )
             .body(Body::from(file.data.into_owned()))
             .unwrap_or_else(|_| StatusCode::INTERNAL_SERVER_ERROR.into_response()),
@@ -51,8 +54,4 @@ pub fn import_map() -> Option<String> {
     let page = Web::get("index.html")?;
     let html = std::str::from_utf8(&page.data).ok()?;
     crate::headers::import_map_of(html).map(str::to_string)
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
